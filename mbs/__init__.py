@@ -1,0 +1,1 @@
+"""Flexible multibody models (exudyn) that produce interface motion and acceleration histories."""

@@ -1,0 +1,1 @@
+"""Thin orchestration: scenes, runs, results files, plots and the `fretwork` command line."""
