@@ -1,0 +1,146 @@
+"""Linear-elastic finite-element bodies assembled with scikit-fem.
+
+Units: mm, N, MPa (N/mm^2), t (tonne), s. Stiffness in N/mm, mass in t.
+DOFs are node-interleaved: node k, component j sits at global index ``dim * k + j`` for
+linear elements (scikit-fem's ``ElementVector`` ordering); ``ElasticBody.node_dofs`` is the
+authoritative map and also covers the mid-edge nodes of quadratic tetrahedra.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import skfem
+from skfem.helpers import ddot, dot, eye, sym_grad, trace
+from skfem.models.elasticity import lame_parameters, plane_stress
+
+from reduction.errors import InputError
+
+_LINEAR_ELEMENTS = {
+    skfem.MeshTri1: skfem.ElementTriP1,
+    skfem.MeshQuad1: skfem.ElementQuad1,
+    skfem.MeshTet1: skfem.ElementTetP1,
+    skfem.MeshHex1: skfem.ElementHex1,
+}
+_QUADRATIC_ELEMENTS = {
+    skfem.MeshTri1: skfem.ElementTriP2,
+    skfem.MeshTet1: skfem.ElementTetP2,
+    skfem.MeshTri2: skfem.ElementTriP2,
+    skfem.MeshTet2: skfem.ElementTetP2,
+}
+
+
+@dataclass(frozen=True)
+class ElasticBody:
+    """An assembled linear-elastic body.
+
+    stiffness: (n_dofs, n_dofs) CSR, N/mm. mass: CSR in t, or None when no density was given.
+    node_dofs: (n_nodes, dim) int, global DOF of node k, component j. Nodes are the mesh
+    vertices followed, for quadratic elements, by one node per mesh edge (mid-edge).
+    """
+
+    mesh: skfem.Mesh
+    basis: skfem.Basis
+    dim: int
+    stiffness: sp.csr_matrix
+    mass: sp.csr_matrix | None
+    node_dofs: np.ndarray
+
+    @property
+    def n_dofs(self) -> int:
+        return int(self.stiffness.shape[0])
+
+    @property
+    def coordinates(self) -> np.ndarray:
+        """(n_nodes, dim) node coordinates in mm, rows matching ``node_dofs``."""
+        return self.basis.doflocs[:, self.node_dofs[:, 0]].T.copy()
+
+
+def _element_for(mesh: skfem.Mesh, quadratic: bool) -> skfem.Element:
+    table = _QUADRATIC_ELEMENTS if quadratic or isinstance(mesh, (skfem.MeshTri2, skfem.MeshTet2)) \
+        else _LINEAR_ELEMENTS
+    for mesh_type, element in table.items():
+        if type(mesh) is mesh_type:
+            return element()
+    supported = sorted({t.__name__ for t in (*_LINEAR_ELEMENTS, *_QUADRATIC_ELEMENTS)})
+    raise InputError(
+        f"mesh type {type(mesh).__name__} (quadratic={quadratic}) is not supported for elasticity; "
+        f"supported: {', '.join(supported)}"
+    )
+
+
+def _per_element(value, n_elements: int, name: str) -> np.ndarray:
+    """Broadcast a scalar or per-element material value to shape (n_elements, 1)."""
+    array = np.asarray(value, dtype=float)
+    if array.ndim == 0:
+        return np.full((n_elements, 1), float(array))
+    if array.shape != (n_elements,):
+        raise InputError(f"{name} must be a scalar or one value per element ({n_elements}), got shape {array.shape}")
+    return array[:, None]
+
+
+def _node_dofs(basis: skfem.Basis, dim: int) -> np.ndarray:
+    blocks = [basis.nodal_dofs]
+    if basis.edge_dofs.size:
+        blocks.append(basis.edge_dofs)
+    elif basis.facet_dofs.size and dim == 2:
+        blocks.append(basis.facet_dofs)  # 2D quadratic: mid-edge nodes are facet DOFs
+    return np.concatenate(blocks, axis=1).T.astype(np.int64)
+
+
+def assemble_elastic_body(
+    mesh: skfem.Mesh,
+    youngs_modulus,
+    poisson_ratio,
+    density=None,
+    *,
+    plane_strain: bool = True,
+    quadratic: bool = False,
+) -> ElasticBody:
+    """Assemble stiffness (and mass) of an isotropic linear-elastic body.
+
+    youngs_modulus: MPa, poisson_ratio: -, density: t/mm^3; each a scalar or one value per element.
+    2D meshes are plane strain (3D Lamé formulas, unit thickness 1 mm) unless
+    ``plane_strain=False`` (plane stress). ``quadratic=True`` uses P2 elements on a linear mesh;
+    quadratic meshes (MeshTet2, MeshTri2) always use P2.
+    """
+    dim = mesh.dim()
+    basis = skfem.Basis(mesh, skfem.ElementVector(_element_for(mesh, quadratic)))
+    n_elements = mesh.t.shape[1]
+    young = _per_element(youngs_modulus, n_elements, "youngs_modulus")
+    poisson = _per_element(poisson_ratio, n_elements, "poisson_ratio")
+    if np.any(young <= 0):
+        raise InputError("youngs_modulus must be positive (MPa)")
+    if np.any((poisson <= -1) | (poisson >= 0.5)):
+        raise InputError("poisson_ratio must lie in (-1, 0.5)")
+    lame = lame_parameters if (dim == 3 or plane_strain) else plane_stress
+    lam, mu = lame(young, poisson)
+
+    @skfem.BilinearForm
+    def elastic_energy(u, v, w):
+        strain = sym_grad(u)
+        stress = 2.0 * w["mu"] * strain + w["lam"] * eye(trace(strain), strain.shape[0])
+        return ddot(stress, sym_grad(v))
+
+    stiffness = elastic_energy.assemble(basis, lam=lam, mu=mu).tocsr()
+    mass = None
+    if density is not None:
+        rho = _per_element(density, n_elements, "density")
+        if np.any(rho <= 0):
+            raise InputError("density must be positive (t/mm^3)")
+
+        @skfem.BilinearForm
+        def kinetic_energy(u, v, w):
+            return w["rho"] * dot(u, v)
+
+        mass = kinetic_energy.assemble(basis, rho=rho).tocsr()
+    return ElasticBody(
+        mesh=mesh,
+        basis=basis,
+        dim=dim,
+        stiffness=stiffness,
+        mass=mass,
+        node_dofs=_node_dofs(basis, dim),
+    )

@@ -1,0 +1,112 @@
+"""Exact static condensation: condensed statics against the full sparse model."""
+
+import numpy as np
+import pytest
+import scipy.sparse.linalg as spla
+import skfem
+
+from reduction.condensation import condense
+from reduction.elasticity import assemble_elastic_body
+from reduction.errors import InputError
+
+STEEL = dict(youngs_modulus=210_000.0, poisson_ratio=0.3, density=7.85e-9)
+
+
+def _full_solution(stiffness, load, fixed):
+    free = np.setdiff1d(np.arange(stiffness.shape[0]), fixed)
+    u = np.zeros(stiffness.shape[0])
+    u[free] = spla.spsolve(stiffness[free][:, free].tocsc(), load[free])
+    return u
+
+
+def _relative(a, b):
+    return np.linalg.norm(a - b) / np.linalg.norm(b)
+
+
+def _body_and_sets(mesh):
+    body = assemble_elastic_body(mesh, **STEEL)
+    x = body.coordinates
+    clamped = body.node_dofs[np.isclose(x[:, 0], x[:, 0].min())].ravel()
+    face_nodes = np.flatnonzero(np.isclose(x[:, 0], x[:, 0].max()))
+    # retained: the loaded end face plus one interior node, in a scrambled order
+    retained = np.random.default_rng(0).permutation(
+        np.concatenate([body.node_dofs[face_nodes].ravel(), body.node_dofs[len(x) // 2]])
+    )
+    return body, clamped, retained
+
+
+@pytest.mark.parametrize(
+    "mesh",
+    [
+        skfem.MeshTri.init_tensor(np.linspace(0, 100, 21), np.linspace(0, 20, 6)),
+        skfem.MeshQuad.init_tensor(np.linspace(0, 100, 21), np.linspace(0, 20, 6)),
+        skfem.MeshTet.init_tensor(np.linspace(0, 100, 11), np.linspace(0, 20, 4), np.linspace(0, 10, 3)),
+        skfem.MeshHex.init_tensor(np.linspace(0, 100, 11), np.linspace(0, 20, 4), np.linspace(0, 10, 3)),
+    ],
+    ids=["tri-plane-strain", "quad-plane-strain", "tet", "hex"],
+)
+@pytest.mark.parametrize("solver", ["cholmod", "splu"])
+def test_condensed_statics_equal_full_model(mesh, solver):
+    body, clamped, retained = _body_and_sets(mesh)
+    rng = np.random.default_rng(1)
+    traction = np.zeros(body.n_dofs)
+    traction[retained] = rng.normal(size=retained.size)
+    gravity = np.zeros(body.n_dofs)
+    gravity[body.node_dofs[:, 1]] = -9810.0
+    gravity = body.mass @ gravity
+
+    condensed = condense(body.stiffness, retained, fixed=clamped,
+                         loads={"traction": traction, "gravity": gravity}, solver=solver)
+    assert condensed.solver == solver
+    for factors in ({"traction": 1.0}, {"traction": 0.5, "gravity": 3.0}):
+        total = sum(f * {"traction": traction, "gravity": gravity}[n] for n, f in factors.items())
+        full = _full_solution(body.stiffness, total, clamped)
+        load_r = sum(f * condensed.loads[n] for n, f in factors.items())
+        u_r = np.linalg.solve(condensed.stiffness, load_r)
+        assert _relative(u_r, full[retained]) < 1e-8
+        assert _relative(condensed.expand(u_r, factors), full) < 1e-8
+
+
+def test_plane_strain_uniaxial_stress_matches_closed_form():
+    """Square pulled in x, free in y, plane strain: eps_xx = sigma (1 - nu^2) / E."""
+    mesh = skfem.MeshQuad.init_tensor(np.linspace(0, 10, 6), np.linspace(0, 10, 6))
+    body = assemble_elastic_body(mesh, 1000.0, 0.3)
+    x = body.coordinates
+    left = np.isclose(x[:, 0], 0)
+    right = np.flatnonzero(np.isclose(x[:, 0], 10))
+    fixed = np.concatenate([body.node_dofs[left, 0], body.node_dofs[np.flatnonzero(left)[:1], 1]])
+    stress = 5.0  # MPa on a 10 mm x 1 mm (unit thickness) face
+    load = np.zeros(body.n_dofs)
+    edge_nodes = np.isclose(x[right, 1], 0) | np.isclose(x[right, 1], 10)
+    load[body.node_dofs[right, 0]] = np.where(edge_nodes, 1.0, 2.0) * stress * 10 / 10
+    condensed = condense(body.stiffness, body.node_dofs[right, 0], fixed=fixed, loads={"pull": load})
+    u_r = np.linalg.solve(condensed.stiffness, condensed.loads["pull"])
+    np.testing.assert_allclose(u_r / 10, stress * (1 - 0.3**2) / 1000.0, rtol=1e-10)
+
+
+def test_expand_handles_many_cases_at_once():
+    body, clamped, retained = _body_and_sets(skfem.MeshTri.init_tensor(np.linspace(0, 50, 11), np.linspace(0, 10, 4)))
+    condensed = condense(body.stiffness, retained, fixed=clamped)
+    cases = np.random.default_rng(2).normal(size=(retained.size, 3))
+    together = condensed.expand(cases)
+    one_by_one = np.stack([condensed.expand(c) for c in cases.T], axis=1)
+    np.testing.assert_allclose(together, one_by_one, rtol=1e-12, atol=1e-14)
+    # expanded field is in equilibrium at every interior DOF
+    residual = body.stiffness @ together
+    assert np.abs(residual[condensed.interior]).max() < 1e-8 * np.abs(residual).max()
+
+
+def test_interior_with_rigid_motion_is_rejected():
+    body = assemble_elastic_body(skfem.MeshTri().refined(2), **STEEL)
+    with pytest.raises(InputError, match="rigid-body motion"):
+        condense(body.stiffness, retained=body.node_dofs[0])
+
+
+def test_bad_dof_sets_are_named():
+    body = assemble_elastic_body(skfem.MeshTri().refined(1), **STEEL)
+    with pytest.raises(InputError, match="both retained and fixed"):
+        condense(body.stiffness, retained=[0, 1], fixed=[1, 2])
+    with pytest.raises(InputError, match="retained DOFs contain duplicates"):
+        condense(body.stiffness, retained=[0, 0])
+    with pytest.raises(InputError, match="out of range"):
+        condense(body.stiffness, retained=[10**6])
