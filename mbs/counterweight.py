@@ -1,0 +1,228 @@
+"""Generic counterweight (CW) geometry, its finite-element mesh and Craig-Bampton reduction.
+
+The CW of a 320 mm-bore medium-speed engine is modelled as a block with a raised hub. Local
+frame of the CW (origin at the centre of the bolted contact face):
+
+* x: tangential (the direction in which the two wings extend from the hub),
+* y: radial, pointing away from the crank axis,
+* z: along the crank axis.
+
+The hub (|x| <= hub_width/2, 0 <= y <= hub_height) carries the flat contact face y = 0 that
+is bolted to the crankshaft web. Above it, the wing plate (|x| <= width/2, hub_height <= y <=
+height) overhangs the hub on both sides: these overhangs are the "wings". In the paper's
+"torsion" mode the wings vibrate along the crank axis (z) in opposite phase, i.e. the CW
+twists about its radial axis.
+
+Craig-Bampton (Hurty) reduction with the contact face as one rigid (RBE2) interface: the
+interface is the floating frame of the reduced body, so the mode basis holds only the
+fixed-interface normal modes and the body's reference node IS the interface.
+
+Units: mm, N, MPa, t, s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+import skfem
+
+from reduction.elasticity import assemble_elastic_body
+from reduction.errors import InputError
+
+
+@dataclass(frozen=True)
+class CounterweightGeometry:
+    """Block counterweight with a raised hub (all lengths mm, material MPa and t/mm^3).
+
+    width: tangential extent of the wing plate (wing tip to wing tip).
+    height: radial extent from the contact face to the outer face.
+    thickness: axial extent (along the crank axis).
+    hub_width: tangential extent of the hub, i.e. of the bolted contact face.
+    hub_height: radial height of the hub below the wing plate (the relief under the wings).
+    elements_*: number of mesh cells along x, y, z (tetrahedra from a tensor grid).
+    """
+
+    width: float = 700.0
+    height: float = 200.0
+    thickness: float = 80.0
+    hub_width: float = 220.0
+    hub_height: float = 30.0
+    youngs_modulus: float = 210000.0
+    poisson_ratio: float = 0.3
+    density: float = 7.85e-9
+    elements_x: int = 14
+    elements_y: int = 4
+    elements_z: int = 2
+
+    def validate(self) -> None:
+        positive = ("width", "height", "thickness", "hub_width", "hub_height", "youngs_modulus", "density")
+        for name in positive:
+            if getattr(self, name) <= 0:
+                raise InputError(f"counterweight {name} must be positive, got {getattr(self, name)}")
+        if not self.hub_width < self.width:
+            raise InputError("counterweight hub_width must be smaller than width (the wings need an overhang)")
+        if not self.hub_height < self.height:
+            raise InputError("counterweight hub_height must be smaller than height")
+        for name in ("elements_x", "elements_y", "elements_z"):
+            if getattr(self, name) < 1:
+                raise InputError(f"counterweight {name} must be at least 1")
+        if self.elements_z % 2:
+            raise InputError("counterweight elements_z must be even so that the wing-tip nodes lie on the mid-plane")
+
+
+@dataclass(frozen=True)
+class ReducedCounterweight:
+    """Craig-Bampton counterweight ready for exudyn.
+
+    node_coordinates: (n_nodes, 3) mm, local CW frame. mode_shapes: (3 n_nodes, n_modes)
+    node-interleaved fixed-interface modes, mass-normalised (1/sqrt(t)).
+    stiffness, mass: full FE matrices (N/mm, t), node-interleaved.
+    eigenfrequencies: (n_modes,) Hz, fixed-interface. interface_nodes: contact-face nodes.
+    wing_tip_nodes: (2,) nodes at the -x and +x wing tips (outer face, mid-plane).
+    torsion_mode: index of the wing "torsion" mode in mode_shapes.
+    total_mass: t. center_of_mass: (3,) mm in the CW frame.
+    """
+
+    geometry: CounterweightGeometry
+    node_coordinates: np.ndarray
+    mode_shapes: np.ndarray
+    stiffness: sp.csr_matrix
+    mass: sp.csr_matrix
+    eigenfrequencies: np.ndarray
+    interface_nodes: np.ndarray
+    wing_tip_nodes: np.ndarray
+    torsion_mode: int
+    total_mass: float
+    center_of_mass: np.ndarray
+
+    @property
+    def n_modes(self) -> int:
+        return int(self.mode_shapes.shape[1])
+
+    @property
+    def torsion_frequency(self) -> float:
+        """Fixed-interface eigenfrequency of the wing torsion mode, Hz."""
+        return float(self.eigenfrequencies[self.torsion_mode])
+
+    def wing_tip_axial_shapes(self) -> np.ndarray:
+        """(2, n_modes): axial (z) displacement of the two wing tips per unit modal coordinate."""
+        return self.mode_shapes[3 * self.wing_tip_nodes + 2, :]
+
+
+def counterweight_mesh(geometry: CounterweightGeometry) -> skfem.MeshTet1:
+    """Tetrahedral mesh of the CW block; cells of the relief under the wings are removed."""
+    geometry.validate()
+    g = geometry
+    half_hub = 0.5 * g.hub_width
+    # Grid lines on the hub edges and on the hub-height level keep the relief boundary exact.
+    n_wing = max(1, round(g.elements_x * (g.width - g.hub_width) / (2.0 * g.width)))
+    n_hub = max(2, g.elements_x - 2 * n_wing)
+    x = np.concatenate([
+        np.linspace(-0.5 * g.width, -half_hub, n_wing + 1)[:-1],
+        np.linspace(-half_hub, half_hub, n_hub + 1)[:-1],
+        np.linspace(half_hub, 0.5 * g.width, n_wing + 1),
+    ])
+    y = np.concatenate([[0.0], np.linspace(g.hub_height, g.height, g.elements_y + 1)])
+    z = np.linspace(-0.5 * g.thickness, 0.5 * g.thickness, g.elements_z + 1)
+    mesh = skfem.MeshTet1.init_tensor(x, y, z)
+    centroids = mesh.p[:, mesh.t].mean(axis=1)
+    relief = (centroids[1] < g.hub_height) & (np.abs(centroids[0]) > half_hub)
+    return mesh.remove_elements(np.nonzero(relief)[0])
+
+
+def _nodes_near(coordinates: np.ndarray, point, tolerance: float) -> int:
+    distance = np.linalg.norm(coordinates - np.asarray(point, dtype=float), axis=1)
+    node = int(np.argmin(distance))
+    if distance[node] > tolerance:
+        raise InputError(f"counterweight mesh has no node within {tolerance} mm of {list(point)}")
+    return node
+
+
+def _fixed_interface_modes(stiffness, mass, interior: np.ndarray, n_modes: int):
+    k_ii = stiffness[interior][:, interior].tocsc()
+    m_ii = mass[interior][:, interior].tocsc()
+    eigenvalues, vectors = sp.linalg.eigsh(k_ii, k=n_modes, M=m_ii, sigma=0.0, which="LM")
+    order = np.argsort(eigenvalues)
+    return eigenvalues[order], vectors[:, order]
+
+
+def _torsion_mode_index(tip_axial: np.ndarray, mode_shapes: np.ndarray) -> int:
+    """Lowest mode whose wing tips move axially in opposite phase and dominate the mode.
+
+    The tetrahedral split of the grid is not mirror-symmetric, so "opposite phase" allows a
+    symmetric part of up to 10 % of the antisymmetric one.
+    """
+    antisymmetric = tip_axial[0] * tip_axial[1] < 0
+    symmetric_part = np.abs(tip_axial[0] + tip_axial[1])
+    opposite = np.abs(tip_axial[0] - tip_axial[1])
+    largest = np.abs(mode_shapes).max(axis=0)
+    candidates = np.nonzero(antisymmetric & (symmetric_part < 0.1 * opposite) & (opposite > 0.5 * largest))[0]
+    if candidates.size == 0:
+        raise InputError(
+            "no wing torsion mode (wing tips moving along the crank axis in opposite phase) among the "
+            f"{mode_shapes.shape[1]} counterweight modes; increase the number of CB modes"
+        )
+    return int(candidates[0])
+
+
+def reduce_counterweight(geometry: CounterweightGeometry, n_modes: int = 6) -> ReducedCounterweight:
+    """Mesh, assemble (quadratic tetrahedra) and Craig-Bampton-reduce the CW.
+
+    n_modes: number of fixed-interface normal modes kept (the contact face is the rigid interface).
+    """
+    if n_modes < 1:
+        raise InputError(f"number of CB modes must be at least 1, got {n_modes}")
+    mesh = counterweight_mesh(geometry)
+    body = assemble_elastic_body(mesh, geometry.youngs_modulus, geometry.poisson_ratio, geometry.density,
+                                 quadratic=True)
+    coordinates = body.coordinates
+    n_nodes = coordinates.shape[0]
+    if not np.array_equal(body.node_dofs, np.arange(3 * n_nodes).reshape(n_nodes, 3)):
+        raise InputError("counterweight DOFs are not node-interleaved as exudyn requires")
+    tolerance = 1e-6 * geometry.width
+    interface_nodes = np.nonzero(np.abs(coordinates[:, 1]) < tolerance)[0]
+    interface_dofs = (3 * interface_nodes[:, None] + np.arange(3)).ravel()
+    interior = np.setdiff1d(np.arange(3 * n_nodes), interface_dofs)
+    eigenvalues, interior_vectors = _fixed_interface_modes(body.stiffness, body.mass, interior, n_modes)
+    mode_shapes = np.zeros((3 * n_nodes, n_modes))
+    mode_shapes[interior] = interior_vectors
+    wing_tip_nodes = np.array([
+        _nodes_near(coordinates, (sign * 0.5 * geometry.width, geometry.height, 0.0), tolerance)
+        for sign in (-1.0, 1.0)
+    ])
+    torsion = _torsion_mode_index(mode_shapes[3 * wing_tip_nodes + 2, :], mode_shapes)
+    ones = np.zeros((3 * n_nodes, 3))
+    for j in range(3):
+        ones[j::3, j] = 1.0
+    mass_per_direction = ones.T @ (body.mass @ ones)
+    total_mass = float(mass_per_direction[0, 0])
+    center_of_mass = (ones.T @ (body.mass @ coordinates.ravel())) / total_mass
+    return ReducedCounterweight(
+        geometry=geometry,
+        node_coordinates=coordinates,
+        mode_shapes=mode_shapes,
+        stiffness=body.stiffness,
+        mass=body.mass,
+        eigenfrequencies=np.sqrt(np.abs(eigenvalues)) / (2.0 * np.pi),
+        interface_nodes=interface_nodes,
+        wing_tip_nodes=wing_tip_nodes,
+        torsion_mode=torsion,
+        total_mass=total_mass,
+        center_of_mass=center_of_mass,
+    )
+
+
+def reduced_matrices(reduced: ReducedCounterweight) -> tuple[np.ndarray, np.ndarray]:
+    """Modal stiffness (N/mm per unit modal coordinate) and mass (t) of the reduced CW."""
+    psi = reduced.mode_shapes
+    return psi.T @ (reduced.stiffness @ psi), psi.T @ (reduced.mass @ psi)
+
+
+def reduced_eigenfrequencies(reduced: ReducedCounterweight) -> np.ndarray:
+    """Eigenfrequencies (Hz) of the reduced body with its interface fixed, from its own matrices."""
+    stiffness, mass = reduced_matrices(reduced)
+    eigenvalues = scipy.linalg.eigh(stiffness, mass, eigvals_only=True)
+    return np.sqrt(np.abs(eigenvalues)) / (2.0 * np.pi)

@@ -1,0 +1,161 @@
+"""Parameters of the generic crankshaft-counterweight model (dataclasses, documented units).
+
+The defaults describe one crank throw of a generic 320 mm-bore medium-speed four-stroke engine:
+crank radius 200 mm, 750 rpm, a 79 kg counterweight bolted to each web. Units: mm, N, MPa, t, s.
+
+Crank frame (rotates with the shaft): z along the crank axis, x from the axis towards the crank
+pin, y tangential (direction of rotation at the pin). The counterweights sit on the webs opposite
+the pin, their contact faces at x = -counterweight_radius.
+"""
+
+from __future__ import annotations
+
+import math
+
+from dataclasses import dataclass, field
+
+from mbs.counterweight import CounterweightGeometry
+from reduction.errors import InputError
+
+#: The effects a scene can switch on; code for an effect that is off is not run.
+KNOWN_EFFECTS = frozenset({"gas_torque", "gear_mesh", "torsional_vibration"})
+
+
+@dataclass(frozen=True)
+class CrankThrowParams:
+    """One crank throw made of two rigid half-throws (journal + web + half pin) joined at the pin.
+
+    crank_radius: axis to pin centre, mm. journal_radius, pin_radius: mm.
+    journal_length: length of each main journal, mm. web_thickness: axial, mm. web_width:
+    tangential width of the web, mm. pin_length: axial length of the crank pin between webs, mm.
+    counterweight_radius: axis to the CW contact face on the web's far side, mm.
+    density: t/mm^3.
+    bearing_stiffness: radial stiffness of each main bearing, N/mm; axial_stiffness: thrust
+    bearing (journal 1 only), N/mm; bearing_damping: N s/mm (radial and axial).
+    pin_stiffness: 6 values for the elastic joint at the crank pin between the half-throws:
+    3 translational (N/mm) then 3 rotational (N mm/rad), in the crank frame. They stand for the
+    bending and torsion of pin and webs; pin_damping: same layout, N s/mm and N mm s/rad.
+    """
+
+    crank_radius: float = 200.0
+    journal_radius: float = 150.0
+    journal_length: float = 180.0
+    web_thickness: float = 90.0
+    web_width: float = 380.0
+    pin_radius: float = 140.0
+    pin_length: float = 160.0
+    counterweight_radius: float = 230.0
+    density: float = 7.85e-9
+    bearing_stiffness: float = 2.0e6
+    axial_stiffness: float = 1.0e6
+    bearing_damping: float = 200.0
+    pin_stiffness: tuple[float, ...] = (5.0e6, 5.0e6, 5.0e6, 5.0e11, 5.0e11, 5.0e11)
+    pin_damping: tuple[float, ...] = (100.0, 100.0, 100.0, 1.0e7, 1.0e7, 1.0e7)
+
+    @property
+    def web_center_z(self) -> float:
+        """Axial position of the web mid-planes (+/-), mm."""
+        return 0.5 * (self.pin_length + self.web_thickness)
+
+    @property
+    def bearing_z(self) -> float:
+        """Axial position of the main-bearing centres (+/-), mm."""
+        return self.web_center_z + 0.5 * (self.web_thickness + self.journal_length)
+
+
+@dataclass(frozen=True)
+class ExcitationParams:
+    """Engine excitation (units N mm for torques).
+
+    gas_orders / gas_torque_amplitudes / gas_torque_phases: the order table of the gas torque of
+    one cylinder, T(t) = sum_k T_k cos(k * crank_angle + phase_k) (orders in multiples of shaft
+    speed; phases rad). Defaults: representative four-stroke medium-speed harmonics, amplitudes as
+    multiples of a 6.4 kN m mean torque (about 500 kW per cylinder at 750 rpm). The tangential
+    gas force T/crank_radius acts on the crank pin, the drive reacts the torque.
+    gear_teeth: teeth of the crank gear, mesh frequency = gear_teeth x shaft frequency.
+    gear_torque_amplitude: mesh torque fluctuation on journal 2, N mm.
+    torsional_stiffness: shaft stiffness between the drive (flywheel) and journal 1 when the
+    torsional-vibration effect is on, N mm/rad; torsional_damping: N mm s/rad;
+    flywheel_inertia: t mm^2.
+    """
+
+    gas_orders: tuple[float, ...] = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5, 5.0, 5.5, 6.0)
+    gas_torque_amplitudes: tuple[float, ...] = tuple(
+        6.4e6 * c for c in (1.6, 2.0, 1.9, 1.6, 1.3, 1.0, 0.75, 0.55, 0.4, 0.3, 0.22, 0.16))
+    gas_torque_phases: tuple[float, ...] = (0.0,) * 12
+    gear_teeth: int = 48
+    gear_torque_amplitude: float = 2.0e5
+    torsional_stiffness: float = 2.0e11
+    torsional_damping: float = 2.0e7
+    flywheel_inertia: float = 2.0e5
+
+    def validate(self) -> None:
+        n = len(self.gas_orders)
+        if len(self.gas_torque_amplitudes) != n or len(self.gas_torque_phases) != n:
+            raise InputError("excitation gas_orders, gas_torque_amplitudes and gas_torque_phases "
+                             "must have the same length (one row of the order table each)")
+        if any(order <= 0 for order in self.gas_orders):
+            raise InputError("excitation gas_orders must be positive multiples of shaft speed")
+        if self.gear_teeth < 1:
+            raise InputError(f"excitation gear_teeth must be at least 1, got {self.gear_teeth}")
+
+
+@dataclass(frozen=True)
+class SolverParams:
+    """Fixed-step generalized-alpha integration.
+
+    time_step: s (also the output sample period). revolutions: simulated shaft revolutions.
+    spectral_radius: numerical damping of generalized-alpha (1 = none, energy-preserving).
+    damping: False switches off all physical damping (bearings, pin, CW modes, shaft).
+    drive: "constant_speed" holds the drive at engine speed (ideal governor and flywheel);
+    "free": no drive, the shaft starts at engine speed and spins freely (energy check).
+    """
+
+    time_step: float = 5.0e-5
+    revolutions: float = 4.0
+    spectral_radius: float = 0.9
+    damping: bool = True
+    drive: str = "constant_speed"
+
+    def validate(self) -> None:
+        if self.time_step <= 0 or self.revolutions <= 0:
+            raise InputError("solver time_step and revolutions must be positive")
+        if not 0.0 <= self.spectral_radius <= 1.0:
+            raise InputError("solver spectral_radius must lie in [0, 1]")
+        if self.drive not in ("constant_speed", "free"):
+            raise InputError(f"solver drive must be 'constant_speed' or 'free', got {self.drive!r}")
+
+
+@dataclass(frozen=True)
+class ModelParams:
+    """Everything that defines one run of the crankshaft-counterweight model.
+
+    speed_rpm: engine speed. n_modes: Craig-Bampton (fixed-interface) modes per CW.
+    modal_damping_ratio: damping ratio of every CW mode (-). effects: subset of KNOWN_EFFECTS.
+    """
+
+    speed_rpm: float = 750.0
+    counterweight: CounterweightGeometry = field(default_factory=CounterweightGeometry)
+    n_modes: int = 6
+    modal_damping_ratio: float = 0.02
+    throw: CrankThrowParams = field(default_factory=CrankThrowParams)
+    excitation: ExcitationParams = field(default_factory=ExcitationParams)
+    solver: SolverParams = field(default_factory=SolverParams)
+    effects: frozenset = frozenset({"gas_torque", "gear_mesh"})
+
+    def validate(self) -> None:
+        if self.speed_rpm <= 0:
+            raise InputError(f"engine speed_rpm must be positive, got {self.speed_rpm}")
+        unknown = set(self.effects) - KNOWN_EFFECTS
+        if unknown:
+            raise InputError(f"unknown effects {sorted(unknown)}; known: {sorted(KNOWN_EFFECTS)}")
+        if self.modal_damping_ratio < 0:
+            raise InputError("modal_damping_ratio must not be negative")
+        self.counterweight.validate()
+        self.excitation.validate()
+        self.solver.validate()
+
+    @property
+    def shaft_speed(self) -> float:
+        """Engine speed in rad/s."""
+        return self.speed_rpm * 2.0 * math.pi / 60.0
