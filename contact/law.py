@@ -134,7 +134,9 @@ def evaluate(overclosure: np.ndarray, slip_increment: np.ndarray, state: Contact
     penetration = overclosure - state.gap
     closed = penetration > 0.0
     pressure = np.where(closed, kn * penetration, 0.0)
-    dpressure_dh = np.where(closed, kn, 0.0)
+    # One-sided derivative at exactly zero penetration: a body that just touches (a cylinder
+    # on a plane under force control) then has a nonsingular tangent in its first iteration.
+    dpressure_dh = np.where(penetration >= 0.0, kn, 0.0)
 
     trial = np.where(closed[:, None], state.elastic_slip + slip_increment, 0.0)
     trial_norm = np.linalg.norm(trial, axis=1)

@@ -1,0 +1,212 @@
+"""From elastic bodies and a pair of surfaces to a condensed :class:`Structure`.
+
+Each body is reduced in three exact steps: its reference points are coupled to node sets
+(RBE2), held DOFs are removed, and the stiffness is statically condensed onto the contact
+surface DOFs plus the reference DOFs. The condensed blocks are placed in one global
+numbering, body after body, and the paired surfaces give the contact operator.
+Units: mm, N, MPa.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from contact.interface import Pairing, Surface, kinematic_operator, pair_surfaces, surface_from_facets
+from contact.structure import Structure
+from reduction.condensation import Condensation, condense
+from reduction.coupling import Coupling, rigid_couplings
+from reduction.elasticity import ElasticBody
+from reduction.errors import InputError
+
+
+@dataclass(frozen=True)
+class ReferencePoint:
+    """A control point coupled rigidly (RBE2) to a node set of its body.
+
+    nodes: mesh node indices. position: (dim,) mm. rotations: couple rotations too
+    (adds one rotational DOF in 2D, three in 3D; radians).
+    """
+
+    nodes: np.ndarray
+    position: np.ndarray
+    rotations: bool = False
+
+
+@dataclass(frozen=True)
+class Body:
+    """One elastic body of a contact model.
+
+    fixed_nodes: node indices whose displacement components ``fixed_components`` are held at
+    zero (e.g. the bottom of a plane specimen). reference_points: name → ReferencePoint.
+    """
+
+    name: str
+    elastic: ElasticBody
+    fixed_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    fixed_components: tuple[int, ...] = (0, 1)
+    reference_points: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CondensedBody:
+    """A body after coupling and condensation, and where it sits in the global numbering."""
+
+    body: Body
+    coupling: Coupling | None
+    condensation: Condensation
+    offset: int
+    reference_dofs: dict  # reference point name → global indices of its DOFs
+
+    @property
+    def size(self) -> int:
+        return self.condensation.retained.size
+
+    def full_displacement(self, retained_global: np.ndarray) -> np.ndarray:
+        """Nodal displacement field (n_dofs,) mm of the body from the global retained vector."""
+        local = retained_global[self.offset:self.offset + self.size]
+        reduced = self.condensation.expand(local)
+        return reduced if self.coupling is None else self.coupling.expand(reduced)
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """The structure together with the bookkeeping to go back to bodies and fields."""
+
+    structure: Structure
+    bodies: dict  # name → CondensedBody
+    pairing: Pairing
+    slave_body: str
+    master_body: str
+
+
+def _component_names(dim: int, rotations: bool) -> list[str]:
+    names = ["ux", "uy", "uz"][:dim]
+    if rotations:
+        names += ["rz"] if dim == 2 else ["rx", "ry", "rz"]
+    return names
+
+
+def _condense_body(body: Body, surface: Surface | None, offset: int) -> CondensedBody:
+    elastic = body.elastic
+    stiffness = elastic.stiffness
+    coupling = None
+    kept = np.arange(elastic.n_dofs)
+    names = list(body.reference_points)
+    if names:
+        groups = [(np.asarray(body.reference_points[n].nodes), body.reference_points[n].position)
+                  for n in names]
+        rotations = {body.reference_points[n].rotations for n in names}
+        if len(rotations) > 1:
+            raise InputError(f"body {body.name}: all reference points of one body must agree on "
+                             "coupling rotations")
+        coupling = rigid_couplings(elastic.n_dofs, elastic.node_dofs, elastic.coordinates, groups,
+                                   rotations=rotations.pop())
+        stiffness = coupling.reduce_matrix(stiffness)
+        kept = coupling.kept
+    surface_dofs = np.zeros(0, dtype=int)
+    if surface is not None:
+        surface_dofs = kept[elastic.node_dofs[surface.nodes]].ravel()
+        if np.any(surface_dofs < 0):
+            raise InputError(f"body {body.name}: the contact surface shares nodes with a "
+                             "reference-point coupling; couple a different node set")
+    reference = [] if coupling is None else [np.atleast_2d(coupling.reference_dofs)[k]
+                                             for k in range(len(names))]
+    retained = np.concatenate([surface_dofs] + reference).astype(int)
+    fixed = np.zeros(0, dtype=int)
+    if len(body.fixed_nodes):
+        fixed = kept[elastic.node_dofs[np.asarray(body.fixed_nodes)][:, list(body.fixed_components)]].ravel()
+        if np.any(fixed < 0):
+            raise InputError(f"body {body.name}: fixed nodes overlap a reference-point coupling")
+        if np.intersect1d(fixed, retained).size:
+            raise InputError(f"body {body.name}: fixed nodes overlap the contact surface")
+    condensation = condense(stiffness, retained, fixed)
+    reference_dofs, start = {}, offset + surface_dofs.size
+    for name, dofs in zip(names, reference):
+        reference_dofs[name] = np.arange(start, start + dofs.size)
+        start += dofs.size
+    return CondensedBody(body, coupling, condensation, offset, reference_dofs)
+
+
+def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, np.ndarray], *,
+             loads: dict | None = None, motions: dict | None = None,
+             search_distance: float = np.inf,
+             initial_gap: np.ndarray | None = None) -> Assembly:
+    """Condense the bodies and pair ``slave`` = (body name, facet indices) with ``master``.
+
+    loads / motions: pattern name → list of (body, reference point, component, value);
+    components are "ux", "uy", "uz", "rz", ...; values in N (N·mm for moments) or mm (rad).
+    A DOF driven by a motion pattern is prescribed. initial_gap (n_slave_points,) mm, when
+    given, replaces the geometric gap (e.g. an analytic profile on flat meshes).
+    """
+    by_name = {b.name: b for b in bodies}
+    for role, (name, _) in (("slave", slave), ("master", master)):
+        if name not in by_name:
+            raise InputError(f"{role} surface names body {name!r}, which is not defined "
+                             f"(bodies: {', '.join(by_name)})")
+    surfaces = {slave[0]: surface_from_facets(by_name[slave[0]].elastic.mesh, slave[1], f"{slave[0]} surface"),
+                master[0]: surface_from_facets(by_name[master[0]].elastic.mesh, master[1], f"{master[0]} surface")}
+    if slave[0] == master[0]:
+        raise InputError("slave and master surfaces must belong to different bodies")
+    condensed, offset = {}, 0
+    for body in bodies:
+        item = _condense_body(body, surfaces.get(body.name), offset)
+        condensed[body.name] = item
+        offset += item.size
+    n = offset
+    stiffness = np.zeros((n, n))
+    for item in condensed.values():
+        index = slice(item.offset, item.offset + item.size)
+        stiffness[index, index] = item.condensation.stiffness
+    pairing = pair_surfaces(surfaces[slave[0]], surfaces[master[0]], search_distance=search_distance)
+    if initial_gap is not None:
+        gap = np.asarray(initial_gap, dtype=float)
+        if gap.shape != pairing.initial_overclosure.shape:
+            raise InputError(f"initial gap has {gap.size} values for {pairing.n_points} contact points")
+        pairing = Pairing(**{**pairing.__dict__, "initial_overclosure": -gap})
+    dim = pairing.normal.shape[1]
+
+    def surface_dofs(name):
+        item = condensed[name]
+        return item.offset + np.arange(surfaces[name].nodes.size * dim).reshape(-1, dim)
+
+    G = kinematic_operator(pairing, surface_dofs(slave[0]), surface_dofs(master[0]), n)
+    labels = {}
+    for item in condensed.values():
+        for ref_name, dofs in item.reference_dofs.items():
+            rotations = item.body.reference_points[ref_name].rotations
+            for comp, dof in zip(_component_names(dim, rotations), dofs):
+                labels[f"{item.body.name}.{ref_name}.{comp}"] = int(dof)
+
+    def pattern_vectors(spec, kind):
+        vectors = {}
+        for pattern, entries in (spec or {}).items():
+            vector = np.zeros(n)
+            for body_name, ref_name, comp, value in entries:
+                label = f"{body_name}.{ref_name}.{comp}"
+                if label not in labels:
+                    raise InputError(f"{kind} {pattern!r}: no control DOF {label!r} "
+                                     f"(available: {', '.join(labels) or 'none'})")
+                vector[labels[label]] += value
+            vectors[pattern] = vector
+        return vectors
+
+    load_vectors = pattern_vectors(loads, "load")
+    motion_vectors = pattern_vectors(motions, "motion")
+    prescribed = np.unique(np.concatenate(
+        [np.flatnonzero(v) for v in motion_vectors.values()] or [np.zeros(0, dtype=int)])).astype(int)
+    for pattern, vector in load_vectors.items():
+        if np.any(vector[prescribed]):
+            raise InputError(f"load {pattern!r} acts on a DOF whose motion is prescribed")
+    structure = Structure(stiffness=stiffness, contact_operator=G, area=pairing.area,
+                          initial_overclosure=pairing.initial_overclosure, dim=dim,
+                          prescribed=prescribed, loads=load_vectors, motions=motion_vectors,
+                          labels=labels)
+    return Assembly(structure, condensed, pairing, slave[0], master[0])
+
+
+def stored_energy(structure: Structure, displacement: np.ndarray) -> float:
+    """Elastic strain energy of the condensed bodies, ½·uᵀ·K·u, mJ (exact for unloaded interiors)."""
+    return 0.5 * float(displacement @ (structure.stiffness @ displacement))
+

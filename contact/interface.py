@@ -1,0 +1,217 @@
+"""Contact surfaces, their pairing and the kinematic operator of an interface.
+
+Small sliding: every contact point (a node of the *slave* surface) is paired once, from the
+geometry, with its projection on the *master* surface; the projection carries interpolation
+weights over the master facet's nodes, so matching and non-matching meshes are one case.
+The operator ``G`` then maps body displacements to the point's overclosure change and its
+tangential relative displacement, ``[Δh, s₁(, s₂)] = G·u``.
+
+Units: mm (coordinates, gaps), mm² (tributary area in 3D), mm per unit thickness in 2D.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+from reduction.errors import InputError
+
+
+@dataclass(frozen=True)
+class Surface:
+    """A boundary surface of one body, as nodes and facets.
+
+    nodes: (n,) mesh node indices.  coordinates: (n, dim) mm.
+    facets: (n_facets, nodes_per_facet) indices into ``nodes``.
+    facet_normals: (n_facets, dim) unit outward normals.
+    area: (n,) tributary area of each node (mm², or mm per unit thickness in 2D).
+    """
+
+    nodes: np.ndarray
+    coordinates: np.ndarray
+    facets: np.ndarray
+    facet_normals: np.ndarray
+    area: np.ndarray
+
+    @property
+    def dim(self) -> int:
+        return self.coordinates.shape[1]
+
+
+def surface_from_facets(mesh, facet_indices: np.ndarray, name: str = "surface") -> Surface:
+    """Build a :class:`Surface` from boundary facets of a scikit-fem mesh.
+
+    Outward normals point away from the element that owns each facet. Tributary areas lump
+    each facet's measure equally onto its nodes (exact for linear elements).
+    """
+    facet_indices = np.asarray(facet_indices, dtype=int)
+    if facet_indices.size == 0:
+        raise InputError(f"{name}: the selection contains no facets of the mesh")
+    if np.any(mesh.f2t[1, facet_indices] >= 0):
+        raise InputError(f"{name}: some selected facets are interior, not on the boundary")
+    points = mesh.p.T
+    facet_nodes = mesh.facets[:, facet_indices].T
+    dim = points.shape[1]
+    vertices = points[facet_nodes]
+    if dim == 2:
+        edge = vertices[:, 1] - vertices[:, 0]
+        measure = np.linalg.norm(edge, axis=1)
+        normals = np.stack([edge[:, 1], -edge[:, 0]], axis=1) / measure[:, None]
+    else:
+        # Quads are split along one diagonal; the two triangle normals are averaged.
+        cross = np.cross(vertices[:, 1] - vertices[:, 0], vertices[:, 2] - vertices[:, 0])
+        if facet_nodes.shape[1] == 4:
+            cross = cross + np.cross(vertices[:, 2] - vertices[:, 0], vertices[:, 3] - vertices[:, 0])
+        measure = 0.5 * np.linalg.norm(cross, axis=1)
+        normals = cross / (2.0 * measure[:, None])
+    owner_centroid = points[mesh.t[:, mesh.f2t[0, facet_indices]].T].mean(axis=1)
+    inward = np.einsum("ij,ij->i", normals, owner_centroid - vertices.mean(axis=1)) > 0
+    normals[inward] *= -1.0
+
+    nodes, local = np.unique(facet_nodes, return_inverse=True)
+    local = local.reshape(facet_nodes.shape)
+    area = np.zeros(nodes.size)
+    np.add.at(area, local.ravel(), np.repeat(measure / facet_nodes.shape[1], facet_nodes.shape[1]))
+    return Surface(nodes=nodes, coordinates=points[nodes], facets=local,
+                   facet_normals=normals, area=area)
+
+
+@dataclass(frozen=True)
+class Pairing:
+    """Contact points (slave nodes) paired with their projections on the master surface.
+
+    master_nodes: (n, k) indices into ``master.nodes``; weights: (n, k) interpolation weights.
+    normal: (n, dim) unit vector from the slave into the master (against the master's
+        outward normal). tangents: (n, dim-1, dim) orthonormal tangent frame.
+    initial_overclosure: h₀ (n,) mm, negative where the surfaces are apart.
+    """
+
+    slave: Surface
+    master: Surface
+    master_nodes: np.ndarray
+    weights: np.ndarray
+    normal: np.ndarray
+    tangents: np.ndarray
+    initial_overclosure: np.ndarray
+
+    @property
+    def n_points(self) -> int:
+        return self.slave.nodes.size
+
+    @property
+    def area(self) -> np.ndarray:
+        return self.slave.area
+
+
+def tangent_frame(normal: np.ndarray) -> np.ndarray:
+    """Orthonormal tangents (n, dim-1, dim) for unit normals (n, dim).
+
+    2D: t = (-n_y, n_x). 3D: t₁ ⟂ n built from the global axis least aligned with n, t₂ = n × t₁.
+    """
+    if normal.shape[1] == 2:
+        return np.stack([-normal[:, 1], normal[:, 0]], axis=1)[:, None, :]
+    axis = np.eye(3)[np.argmin(np.abs(normal), axis=1)]
+    first = np.cross(axis, normal)
+    first /= np.linalg.norm(first, axis=1, keepdims=True)
+    return np.stack([first, np.cross(normal, first)], axis=1)
+
+
+def _project_2d(points, seg_a, seg_b):
+    """Closest points of (n,2) points on candidate segments (n,c,2): parameters and distances."""
+    edge = seg_b - seg_a
+    rel = points[:, None, :] - seg_a
+    xi = np.clip(np.einsum("ncd,ncd->nc", rel, edge) / np.einsum("ncd,ncd->nc", edge, edge), 0, 1)
+    closest = seg_a + xi[..., None] * edge
+    return xi, np.linalg.norm(points[:, None, :] - closest, axis=2)
+
+
+def _project_triangle(points, a, b, c):
+    """Barycentric weights of the closest points of (n,3) points on triangles (n,c,3) each."""
+    e0, e1 = b - a, c - a
+    rel = points[:, None, :] - a
+    d00 = np.einsum("ncd,ncd->nc", e0, e0)
+    d01 = np.einsum("ncd,ncd->nc", e0, e1)
+    d11 = np.einsum("ncd,ncd->nc", e1, e1)
+    d20 = np.einsum("ncd,ncd->nc", rel, e0)
+    d21 = np.einsum("ncd,ncd->nc", rel, e1)
+    denom = d00 * d11 - d01 * d01
+    v = (d11 * d20 - d01 * d21) / denom
+    w = (d00 * d21 - d01 * d20) / denom
+    bary = np.stack([1 - v - w, v, w], axis=-1)
+    # Points outside the triangle are clamped onto it; exact enough for small sliding pairing.
+    bary = np.clip(bary, 0.0, None)
+    bary /= bary.sum(axis=-1, keepdims=True)
+    closest = bary[..., 0:1] * a + bary[..., 1:2] * b + bary[..., 2:3] * c
+    return bary, np.linalg.norm(points[:, None, :] - closest, axis=2)
+
+
+def pair_surfaces(slave: Surface, master: Surface, *, search_distance: float = np.inf,
+                  candidates: int = 8, name: str = "interface") -> Pairing:
+    """Pair every slave node with its closest-point projection on the master facets.
+
+    search_distance (mm): slave nodes farther than this from the master are an input error,
+    so a misplaced surface is reported instead of silently producing open contact points.
+    """
+    if slave.dim != master.dim:
+        raise InputError(f"{name}: slave surface is {slave.dim}D but master surface is {master.dim}D")
+    dim = slave.dim
+    if dim == 2:
+        facets = master.facets
+    else:
+        facets = master.facets if master.facets.shape[1] == 3 else np.concatenate(
+            [master.facets[:, [0, 1, 2]], master.facets[:, [0, 2, 3]]])
+    facet_normal = master.facet_normals if dim == 2 or master.facets.shape[1] == 3 else np.concatenate(
+        [master.facet_normals, master.facet_normals])
+    corners = master.coordinates[facets]
+    tree = cKDTree(corners.mean(axis=1))
+    count = min(candidates, len(facets))
+    _, nearest = tree.query(slave.coordinates, k=count)
+    nearest = np.asarray(nearest).reshape(len(slave.coordinates), count)
+    cand = corners[nearest]
+    if dim == 2:
+        xi, dist = _project_2d(slave.coordinates, cand[:, :, 0], cand[:, :, 1])
+        weights_all = np.stack([1 - xi, xi], axis=-1)
+    else:
+        weights_all, dist = _project_triangle(slave.coordinates, cand[:, :, 0], cand[:, :, 1],
+                                              cand[:, :, 2])
+    best = np.argmin(dist, axis=1)
+    rows = np.arange(len(best))
+    chosen = nearest[rows, best]
+    if np.any(dist[rows, best] > search_distance):
+        worst = float(dist[rows, best].max())
+        raise InputError(f"{name}: slave nodes lie up to {worst:.4g} mm from the master surface, "
+                         f"beyond the search distance {search_distance:g} mm; check the surface "
+                         "selections and the body positions")
+    weights = weights_all[rows, best]
+    master_nodes = facets[chosen]
+    projection = np.einsum("nk,nkd->nd", weights, master.coordinates[master_nodes])
+    normal = -facet_normal[chosen]
+    overclosure = np.einsum("nd,nd->n", slave.coordinates - projection, normal)
+    return Pairing(slave=slave, master=master, master_nodes=master_nodes, weights=weights,
+                   normal=normal, tangents=tangent_frame(normal), initial_overclosure=overclosure)
+
+
+def kinematic_operator(pairing: Pairing, slave_dofs: np.ndarray, master_dofs: np.ndarray,
+                       n_columns: int) -> sp.csr_matrix:
+    """Sparse G, (n_points·dim, n_columns): rows per point [normal, tangent(s)].
+
+    slave_dofs: (n_slave_nodes, dim) column index of each slave node's displacement
+    components; master_dofs: (n_master_nodes, dim) likewise. ``G·u`` is the change of
+    overclosure and the tangential displacement of the slave relative to the master.
+    """
+    n, dim = pairing.normal.shape
+    frame = np.concatenate([pairing.normal[:, None, :], pairing.tangents], axis=1)  # (n, dim, dim)
+    row_ids = (np.arange(n)[:, None] * dim + np.arange(dim)[None, :])  # (n, dim rows)
+    rows_s = np.repeat(row_ids[:, :, None], dim, axis=2)
+    cols_s = np.repeat(slave_dofs[:, None, :], dim, axis=1)
+    k = pairing.weights.shape[1]
+    rows_m = np.repeat(rows_s[:, None], k, axis=1)
+    cols_m = np.repeat(master_dofs[pairing.master_nodes][:, :, None, :], dim, axis=2)
+    vals_m = -pairing.weights[:, :, None, None] * frame[:, None, :, :]
+    rows = np.concatenate([rows_s.ravel(), rows_m.ravel()])
+    cols = np.concatenate([cols_s.ravel(), cols_m.ravel()])
+    vals = np.concatenate([frame.ravel(), vals_m.ravel()])
+    return sp.csr_matrix((vals, (rows, cols)), shape=(n * dim, n_columns))

@@ -1,0 +1,192 @@
+"""Incremental Newton solution of the contact problem in contact space.
+
+Unknowns are the contact kinematics ``g`` and the free control DOFs ``q`` of a
+:class:`contact.structure.ContactSpace`. Each increment is solved by Newton with the
+consistent, unsymmetric tangent of :mod:`contact.law`, reduced to the closed points (open
+points carry no force, so their rows decouple), with a backtracking line search; an
+increment that does not converge, or whose wear exceeds the cap, is cut back and re-solved
+in sub-steps. History variables advance only from converged sub-steps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from contact.law import ContactLaw, ContactState, Response, advance, evaluate, wear_increment
+from contact.linear import solve_newton_system, tangent_blocks
+from contact.structure import ContactSpace
+
+
+class ConvergenceError(RuntimeError):
+    """An increment did not converge within the allowed cutbacks; the message says why."""
+
+
+@dataclass(frozen=True)
+class NewtonSettings:
+    """Iteration controls.
+
+    max_iterations: Newton iterations per attempt before a cutback.
+    max_cutbacks: how many times an increment may be halved.
+    displacement_tolerance: converged when the kinematic residual is below this (mm) ...
+    force_tolerance: ... and the control-DOF force residual below this fraction of the
+        force scale.
+    wear_cap: largest wear depth increment (mm) one sub-step may add (explicit wear
+        integration); larger increments are cut back.
+    """
+
+    max_iterations: int = 30
+    max_cutbacks: int = 10
+    displacement_tolerance: float = 1e-10
+    force_tolerance: float = 1e-9
+    wear_cap: float = np.inf
+
+
+@dataclass(frozen=True)
+class Effects:
+    """The history effects a scene asks for; what is off is not computed."""
+
+    cof_evolution: bool = False
+    wear: bool = False
+    cycle_jump: float = 1.0
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """A converged configuration.
+
+    kinematics: g (n_rows,) mm, relative to h₀.  control: q (n_control,) mm.
+    forces: λ (n_rows,) N, nodal contact forces [A·p, A·τ] per point.
+    amplitudes: the pattern amplitudes it was solved for.
+    """
+
+    kinematics: np.ndarray
+    control: np.ndarray
+    forces: np.ndarray
+    amplitudes: np.ndarray
+
+
+@dataclass
+class IncrementStats:
+    """Counters of one increment, for benchmarks and stability tests."""
+
+    iterations: int = 0
+    max_iterations: int = 0
+    cutbacks: int = 0
+    substeps: int = 0
+
+
+class ContactSolver:
+    """Owns the Newton iteration for one :class:`ContactSpace` and one :class:`ContactLaw`."""
+
+    def __init__(self, space: ContactSpace, law: ContactLaw, settings: NewtonSettings = NewtonSettings()):
+        self.space = space
+        self.law = law
+        self.settings = settings
+        structure = space.structure
+        self.dim = structure.dim
+        self.n_points = structure.n_points
+        self.area = structure.area
+        self.h0 = structure.initial_overclosure
+
+    def initial_equilibrium(self) -> Equilibrium:
+        n_patterns = len(self.space.structure.patterns)
+        return Equilibrium(np.zeros(self.space.n_rows), np.zeros(self.space.n_control),
+                           np.zeros(self.space.n_rows), np.zeros(n_patterns))
+
+    def _split(self, kinematics: np.ndarray, reference: np.ndarray):
+        per_point = kinematics.reshape(self.n_points, self.dim)
+        overclosure = self.h0 + per_point[:, 0]
+        slip_increment = per_point[:, 1:] - reference.reshape(self.n_points, self.dim)[:, 1:]
+        return overclosure, slip_increment
+
+    def _forces(self, response: Response) -> np.ndarray:
+        traction = np.concatenate([response.pressure[:, None], response.shear], axis=1)
+        return (self.area[:, None] * traction).ravel()
+
+    def _residual(self, g, q, state, reference, g_f, f_q):
+        response = evaluate(*self._split(g, reference), state, self.law)
+        forces = self._forces(response)
+        r_kin = g - g_f + self.space.E @ q + self.space.W @ forces
+        r_ctl = self.space.Sq @ q - self.space.E.T @ forces - f_q
+        return r_kin, r_ctl, response, forces
+
+    def _converged(self, r_kin, r_ctl, force_scale) -> bool:
+        ok = np.max(np.abs(r_kin), initial=0.0) <= self.settings.displacement_tolerance
+        return ok and np.max(np.abs(r_ctl), initial=0.0) <= self.settings.force_tolerance * force_scale
+
+    def _merit(self, r_kin, r_ctl, force_scale) -> float:
+        return float(np.sqrt(np.sum((r_kin / self.settings.displacement_tolerance) ** 2)
+                             + np.sum((r_ctl / (self.settings.force_tolerance * force_scale)) ** 2)))
+
+    def _newton_step(self, response: Response, r_kin, r_ctl):
+        """Solve J·[Δg, Δq] = −[r_kin, r_ctl] for the current consistent tangent."""
+        return solve_newton_system(self.space, tangent_blocks(response, self.area), r_kin, r_ctl)
+
+    def _solve_to(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
+                  stats: IncrementStats) -> tuple[Equilibrium, Response] | None:
+        """Newton from ``start`` to the load ``amplitudes``; None if it does not converge."""
+        g_f, f_q = self.space.driving(amplitudes)
+        force_scale = max(1.0, float(np.max(np.abs(f_q), initial=0.0)),
+                          float(np.max(np.abs(start.forces), initial=0.0)))
+        reference = start.kinematics
+        g = start.kinematics + (g_f - self.space.driving(start.amplitudes)[0])
+        q = start.control.copy()
+        r_kin, r_ctl, response, forces = self._residual(g, q, state, reference, g_f, f_q)
+        merit = self._merit(r_kin, r_ctl, force_scale)
+        for iteration in range(1, self.settings.max_iterations + 1):
+            delta_g, delta_q = self._newton_step(response, r_kin, r_ctl)
+            step = 1.0
+            while True:
+                trial = self._residual(g + step * delta_g, q + step * delta_q, state, reference, g_f, f_q)
+                trial_merit = self._merit(trial[0], trial[1], force_scale)
+                if trial_merit <= (1.0 - 1e-4 * step) * merit or step < 1.0 / 64:
+                    break
+                step *= 0.5
+            g, q = g + step * delta_g, q + step * delta_q
+            r_kin, r_ctl, response, forces = trial
+            merit = trial_merit
+            if not np.all(np.isfinite(g)) or not np.all(np.isfinite(q)):
+                break
+            if self._converged(r_kin, r_ctl, force_scale):
+                stats.iterations += iteration
+                stats.max_iterations = max(stats.max_iterations, iteration)
+                return Equilibrium(g, q, forces, amplitudes.copy()), response
+        stats.iterations += self.settings.max_iterations
+        return None
+
+    def increment(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
+                  effects: Effects) -> tuple[Equilibrium, ContactState, np.ndarray, IncrementStats]:
+        """Advance from ``start`` to the load ``amplitudes``, cutting back as needed.
+
+        Returns the converged equilibrium, the advanced state, the final point status and
+        the iteration counters. Raises :class:`ConvergenceError` after ``max_cutbacks``.
+        """
+        stats = IncrementStats()
+        targets = [(np.asarray(amplitudes, dtype=float), 0)]  # stack of (amplitudes, cutback level)
+        equilibrium, status = start, None
+        while targets:
+            target, level = targets[-1]
+            solved = self._solve_to(equilibrium, state, target, stats)
+            too_much_wear = False
+            if solved is not None and effects.wear and np.isfinite(self.settings.wear_cap):
+                wear_now = wear_increment(solved[1], self.law, effects.cycle_jump).sum(axis=0)
+                too_much_wear = float(wear_now.max(initial=0.0)) > self.settings.wear_cap
+            if solved is None or too_much_wear:
+                if level >= self.settings.max_cutbacks:
+                    reason = ("the wear increment stays above the cap "
+                              f"{self.settings.wear_cap:g} mm" if too_much_wear else
+                              "Newton did not converge (tangential equilibrium may be lost: "
+                              "the load exceeds what friction can carry, or the step is too large)")
+                    raise ConvergenceError(f"increment failed after {level} cutbacks: {reason}")
+                stats.cutbacks += 1
+                targets[-1] = (target, level + 1)
+                targets.append((0.5 * (equilibrium.amplitudes + target), level + 1))
+                continue
+            equilibrium, response = solved
+            state, status = advance(state, response, self.law, cof_evolution=effects.cof_evolution,
+                                    wear=effects.wear, cycle_jump=effects.cycle_jump)
+            stats.substeps += 1
+            targets.pop()
+        return equilibrium, state, status, stats

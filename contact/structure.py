@@ -1,0 +1,177 @@
+"""The condensed structure an interface lives in, and its contact-space operators.
+
+A :class:`Structure` is the statically condensed stiffness of all bodies on their retained
+DOFs (contact surfaces and control points, in one global numbering), the contact operator
+``G`` of the paired surfaces, load patterns (forces) and motion patterns (prescribed
+displacements). The solver does not work on it directly: :class:`ContactSpace` eliminates
+the body DOFs exactly so that the unknowns are the contact kinematics ``g = G·u`` plus the
+few free control DOFs ``q`` that keep a floating body (a cylinder under force control, a
+bolted counterweight) in equilibrium:
+
+    g − g_f + E·q + W·λ(g) = 0          W = G·K_cc⁻¹·Gᵀ   (contact compliance, mm/N)
+    S_q·q − Eᵀ·λ(g) − f_q = 0            E = G·K_cc⁻¹·K_cq,  S_q = K_qq − K_qc·K_cc⁻¹·K_cq
+
+with λ = A·[p, τ] the nodal contact forces (N). K_cc must be invertible: each body must be
+held by fixed DOFs, prescribed DOFs or its control DOFs.
+Units: mm, N, N/mm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as la
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from reduction.errors import InputError
+
+
+@dataclass(frozen=True)
+class Structure:
+    """Condensed bodies and their contact interface in one global DOF numbering.
+
+    stiffness: (n, n) dense N/mm, the condensed stiffness of all bodies plus bolt elements.
+    contact_operator: G, sparse (n_points·dim, n); rows per point [normal, tangent(s)].
+    area: (n_points,) tributary area A (mm², or mm per unit thickness in 2D).
+    initial_overclosure: h₀ (n_points,) mm.
+    prescribed: indices of displacement-controlled DOFs (held at the motion patterns).
+    loads: name → (n,) force pattern, N. motions: name → (n,) displacement pattern, mm,
+        nonzero only on prescribed DOFs. A load history scales each pattern in time.
+    labels: name → DOF index, for control DOFs worth reporting (e.g. "cylinder.rp.uy").
+    """
+
+    stiffness: np.ndarray
+    contact_operator: sp.csr_matrix
+    area: np.ndarray
+    initial_overclosure: np.ndarray
+    dim: int
+    prescribed: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    loads: dict = field(default_factory=dict)
+    motions: dict = field(default_factory=dict)
+    labels: dict = field(default_factory=dict)
+
+    @property
+    def n_dofs(self) -> int:
+        return self.stiffness.shape[0]
+
+    @property
+    def n_points(self) -> int:
+        return self.area.size
+
+    @property
+    def patterns(self) -> tuple[str, ...]:
+        """Names of all load and motion patterns, in the order of amplitude vectors."""
+        return tuple(self.loads) + tuple(self.motions)
+
+
+class _BlockFactor:
+    """LU factors of a block-diagonal dense matrix, one per connected block (one per body)."""
+
+    def __init__(self, matrix: np.ndarray):
+        n_blocks, labels = connected_components(sp.csr_matrix(np.abs(matrix) > 0), directed=False)
+        self.blocks = [np.flatnonzero(labels == b) for b in range(n_blocks)]
+        self.factors = []
+        for index in self.blocks:
+            block = matrix[np.ix_(index, index)]
+            factor = la.lu_factor(block, check_finite=False)
+            pivots = np.abs(np.diag(factor[0]))
+            if pivots.min() <= 1e-12 * pivots.max():
+                raise InputError("a body is not supported: its stiffness is singular with the "
+                                 "contact surfaces free and its control points held; fix a "
+                                 "boundary, prescribe a motion or add a control point")
+            self.factors.append(factor)
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        out = np.empty_like(rhs, dtype=float)
+        for index, factor in zip(self.blocks, self.factors):
+            out[index] = la.lu_solve(factor, rhs[index], check_finite=False)
+        return out
+
+
+class ContactSpace:
+    """Exact elimination of a :class:`Structure` onto contact kinematics and control DOFs."""
+
+    def __init__(self, structure: Structure):
+        self.structure = structure
+        n = structure.n_dofs
+        G = structure.contact_operator.tocsr()
+        prescribed = np.asarray(structure.prescribed, dtype=int)
+        free = np.setdiff1d(np.arange(n), prescribed)
+        in_contact = np.zeros(n, dtype=bool)
+        in_contact[np.unique(G.indices)] = True
+        self.contact_dofs = free[in_contact[free]]
+        self.control_dofs = free[~in_contact[free]]
+        self.prescribed = prescribed
+        K = structure.stiffness
+        c, q, p = self.contact_dofs, self.control_dofs, prescribed
+        self._Kcc = _BlockFactor(K[np.ix_(c, c)])
+        self._Kcq, self._Kcp = K[np.ix_(c, q)], K[np.ix_(c, p)]
+        Gc = G[:, c]
+        self.Gc = Gc.tocsr()
+        compliance_Gt = self._Kcc.solve(Gc.T.toarray())
+        self.W = np.ascontiguousarray(Gc @ compliance_Gt)
+        self.W = 0.5 * (self.W + self.W.T)
+        compliance_Kcq = self._Kcc.solve(self._Kcq)
+        self.E = Gc @ compliance_Kcq
+        self.Sq = K[np.ix_(q, q)] - self._Kcq.T @ compliance_Kcq
+        self._compliance_Kcp = self._Kcc.solve(self._Kcp)
+        self._Kqp = K[np.ix_(q, p)]
+        # Each pattern, at unit amplitude, as a contact-space load: g_f and f_q columns.
+        force_c, force_q, motion_p = [], [], []
+        for name in structure.patterns:
+            vector = structure.loads.get(name)
+            if vector is None:
+                motion = structure.motions[name]
+                force_c.append(np.zeros(c.size))
+                force_q.append(np.zeros(q.size))
+                motion_p.append(motion[p])
+            else:
+                force_c.append(vector[c])
+                force_q.append(vector[q])
+                motion_p.append(np.zeros(p.size))
+        self.pattern_force_c = np.array(force_c).T.reshape(c.size, -1)
+        self.pattern_force_q = np.array(force_q).T.reshape(q.size, -1)
+        self.pattern_motion = np.array(motion_p).T.reshape(p.size, -1)
+        effective_c = self.pattern_force_c - self._Kcp @ self.pattern_motion
+        compliance_f = self._Kcc.solve(effective_c)
+        self.pattern_gf = Gc @ compliance_f
+        self.pattern_fq = (self.pattern_force_q - self._Kqp @ self.pattern_motion
+                           - self._Kcq.T @ compliance_f)
+
+    @property
+    def n_rows(self) -> int:
+        return self.W.shape[0]
+
+    @property
+    def n_control(self) -> int:
+        return self.control_dofs.size
+
+    def driving(self, amplitudes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """g_f (mm) and f_q (N) for a vector of pattern amplitudes."""
+        return self.pattern_gf @ amplitudes, self.pattern_fq @ amplitudes
+
+    def displacements(self, control: np.ndarray, forces: np.ndarray, amplitudes: np.ndarray) -> np.ndarray:
+        """All retained displacements (n,) mm from control DOFs q and contact forces λ (N)."""
+        s = self.structure
+        u = np.zeros(s.n_dofs)
+        motion = self.pattern_motion @ amplitudes
+        rhs = (self.pattern_force_c @ amplitudes - self._Kcp @ motion - self._Kcq @ control
+               - self.Gc.T @ forces)
+        u[self.contact_dofs] = self._Kcc.solve(rhs)
+        u[self.control_dofs] = control
+        u[self.prescribed] = motion
+        return u
+
+    def external_forces(self, displacement: np.ndarray, forces: np.ndarray,
+                        amplitudes: np.ndarray) -> np.ndarray:
+        """Forces (n,) N the surroundings apply: the loads, and the reactions at prescribed DOFs."""
+        s = self.structure
+        applied = np.zeros(s.n_dofs)
+        for k, name in enumerate(s.patterns):
+            if name in s.loads:
+                applied += amplitudes[k] * s.loads[name]
+        internal = s.stiffness @ displacement + s.contact_operator.T @ forces
+        applied[self.prescribed] = internal[self.prescribed]
+        return applied
