@@ -143,6 +143,8 @@ def export_fmu(
     if fmi_version not in (2, 3):
         raise InputError(f"FMI version {fmi_version!r} is not supported: choose 2 or 3")
     output_path = Path(output_path)
+    if output_path.is_dir():
+        raise InputError(f"FMU output path {output_path} is a folder; give a file name such as loads.fmu")
     table = read_playback_table(results_path, signals)
     identifier = model_identifier(model_name or output_path.stem)
     token = instantiation_token(table)
@@ -207,6 +209,9 @@ def _read_time(histories: h5py.Group, results_path: Path) -> np.ndarray:
     dataset = histories["time"]
     if dataset.ndim != 1 or not np.issubdtype(dataset.dtype, np.number):
         raise InputError(f"/histories/time must be a 1-D numeric vector, got shape {dataset.shape} of {dataset.dtype}")
+    units = _text_attribute(dataset, "units")
+    if units not in ("", "s"):
+        raise InputError(f"/histories/time is in {units!r}; the FMU plays histories in seconds (units='s')")
     time = np.asarray(dataset[()], dtype=np.float64)
     if time.size == 0:
         raise InputError(f"results file {results_path}: /histories/time is empty, there is nothing to play back")
@@ -394,7 +399,7 @@ def model_description_xml(table: PlaybackTable, fmi_version: int, identifier: st
         {
             "startTime": repr(float(table.time[0])),
             "stopTime": repr(float(table.time[-1])),
-            "stepSize": repr(float(np.median(np.diff(table.time)))),
+            "stepSize": f"{np.median(np.diff(table.time)):.12g}",
         },
     )
 
@@ -589,7 +594,8 @@ def run_export_fmu(args: argparse.Namespace) -> int:
             return 2
     for warning in caught:
         print(f"warning: {warning.message}", file=sys.stderr)
-    print(f"wrote {path} (FMI {args.fmi}.0 co-simulation, {path.stat().st_size / 1e6:.2f} MB)")
+    content = "sources only, no binary" if caught else "binary and sources"
+    print(f"wrote {path} (FMI {args.fmi}.0 co-simulation, {content}, {path.stat().st_size / 1e6:.2f} MB)")
     return 0
 
 

@@ -25,7 +25,7 @@ from reduction.errors import InputError
 OUTPUT_INTERVAL = 1.0 / 256.0
 
 
-def write_results(path, time, signals, *, histories=True):
+def write_results(path, time, signals, *, histories=True, time_units="s"):
     """Results file in the shared layout; signals: name -> (data, attrs)."""
     with h5py.File(path, "w") as results:
         results.attrs["fretwork_format"] = "fretwork-results"
@@ -33,7 +33,7 @@ def write_results(path, time, signals, *, histories=True):
         if not histories:
             return path
         group = results.create_group("histories")
-        group.create_dataset("time", data=time).attrs["units"] = "s"
+        group.create_dataset("time", data=time).attrs["units"] = time_units
         for name, (data, attrs) in signals.items():
             dataset = group.create_dataset(name, data=data)
             for key, value in attrs.items():
@@ -264,6 +264,11 @@ BAD_INPUTS = {
         lambda time, signals: (time, {"bolt_force": (np.zeros(time.size - 1), {"units": "N"})}),
         "signal 'bolt_force' has shape",
     ),
+    "time not in seconds": (
+        dict(time_units="ms"),
+        lambda time, signals: (time, signals),
+        "time is in 'ms'",
+    ),
     "no histories group": (
         dict(histories=False),
         lambda time, signals: (time, signals),
@@ -278,12 +283,20 @@ def test_bad_input_raises_and_leaves_no_file(case, history, tmp_path):
     options = dict(options)
     time, signals, _ = history
     bad_time, bad_signals = make(time, signals)
-    write_results(tmp_path / "bad.h5", bad_time, bad_signals, histories=options.pop("histories", True))
+    write_results(
+        tmp_path / "bad.h5", bad_time, bad_signals,
+        histories=options.pop("histories", True), time_units=options.pop("time_units", "s"),
+    )
     output = tmp_path / "out" / "loads.fmu"
     with pytest.raises(InputError, match=message):
         export_fmu(tmp_path / "bad.h5", output, **options)
     assert not output.exists()
     assert not output.parent.exists() or list(output.parent.iterdir()) == []
+
+
+def test_output_path_that_is_a_folder_raises(results_file, tmp_path):
+    with pytest.raises(InputError, match="is a folder"):
+        export_fmu(results_file, tmp_path)
 
 
 def test_missing_results_file_raises(tmp_path):
@@ -296,7 +309,7 @@ def test_cli_writes_fmu_and_reports_bad_input(results_file, tmp_path, capsys):
     output = tmp_path / "cli.fmu"
     code = main_export([str(results_file), "--signals", "bolt_force,wing_acceleration", "--fmi", "3", "-o", str(output)])
     assert code == 0 and output.exists()
-    assert "wrote" in capsys.readouterr().out
+    assert "binary and sources" in capsys.readouterr().out
     code = main_export([str(results_file), "--signals", "nope", "-o", str(tmp_path / "bad.fmu")])
     assert code == 2
     assert "unknown signal" in capsys.readouterr().err
