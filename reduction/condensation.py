@@ -15,7 +15,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from reduction.errors import InputError
-from reduction.factorization import factorize
+from reduction import pardiso
+from reduction.factorization import factorize, resolve_solver
 
 #: columns of K_ir solved per block; bounds the dense work array to n_interior x 512 floats.
 _RHS_BLOCK = 512
@@ -80,9 +81,10 @@ def condense(stiffness, retained, fixed=(), loads=None, *, solver: str = "auto")
     """Condense a sparse symmetric stiffness (N/mm) exactly onto the retained DOFs.
 
     retained: DOF indices kept (any order; the result follows it). fixed: DOFs held at zero.
-    loads: named full load vectors (n,), N. solver: "auto" (fastest installed), "cholmod" or "splu".
+    loads: named full load vectors (n,), N. solver: "auto" (fastest installed), "pardiso", "cholmod" or "splu".
     The interior block K_ii must be non-singular: retained plus fixed DOFs must stop every
-    rigid-body motion of the interior.
+    rigid-body motion of the interior. Otherwise InputError, raised here or, with PARDISO (whose
+    Schur complement is still right then), at the first interior solve (loads, ``expand``).
     """
     matrix = sp.csr_matrix(stiffness)
     n_dofs = matrix.shape[0]
@@ -102,21 +104,26 @@ def condense(stiffness, retained, fixed=(), loads=None, *, solver: str = "auto")
     is_interior[fixed] = False
     interior = np.flatnonzero(is_interior)
 
-    k_rr = matrix[retained][:, retained].toarray()
+    solver = resolve_solver(solver)
     k_ir = matrix[interior][:, retained].tocsc()
-    schur = k_rr
-    condensed_loads = {name: np.asarray(vector, dtype=float)[retained].copy() for name, vector in loads.items()}
+    loads = {name: np.asarray(vector, dtype=float) for name, vector in loads.items()}
+    condensed_loads = {name: vector[retained].copy() for name, vector in loads.items()}
     responses: dict[str, np.ndarray] = {}
     solve = _no_interior
-    solver_name = "none"
-    if interior.size:
+    if not interior.size:
+        schur = matrix[retained][:, retained].toarray()
+    else:
         k_ii = matrix[interior][:, interior]
-        factor = factorize(k_ii, solver=solver, label="interior stiffness K_ii")
-        solve = factor.solve
-        solver_name = factor.name
-        schur = _schur_complement(k_rr, k_ir, factor.solve)
+        solve = _lazy_factor(k_ii, solver)
+        if solver == "pardiso":
+            kept = np.concatenate([retained, interior])
+            schur = pardiso.schur_complement(
+                matrix[kept][:, kept], np.arange(retained.size), label="interior stiffness K_ii"
+            )
+        else:
+            schur = _schur_complement(matrix[retained][:, retained].toarray(), k_ir, solve)
         for name, vector in loads.items():
-            responses[name] = factor.solve(np.asarray(vector, dtype=float)[interior])
+            responses[name] = solve(vector[interior])
             condensed_loads[name] -= k_ir.T @ responses[name]
     return Condensation(
         retained=retained,
@@ -125,11 +132,25 @@ def condense(stiffness, retained, fixed=(), loads=None, *, solver: str = "auto")
         interior=interior,
         fixed=fixed,
         n_dofs=n_dofs,
-        solver=solver_name,
+        solver=solver if interior.size else "none",
         interior_load_response=responses,
         interior_retained_coupling=k_ir.tocsr(),
         solve_interior=solve,
     )
+
+
+def _lazy_factor(k_ii: sp.csr_matrix, solver: str) -> Callable[[np.ndarray], np.ndarray]:
+    """K_ii^-1 b, factorising on first use: a PARDISO Schur complement alone does not need it."""
+    factors = []
+
+    def solve(rhs: np.ndarray) -> np.ndarray:
+        if not factors:
+            factors.append(factorize(k_ii, solver=solver, label="interior stiffness K_ii"))
+        return factors[0].solve(rhs)
+
+    if solver != "pardiso":
+        solve(np.zeros(k_ii.shape[0]))  # factorise now so a singular K_ii is reported at once
+    return solve
 
 
 def _no_interior(rhs: np.ndarray) -> np.ndarray:

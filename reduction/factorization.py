@@ -1,7 +1,9 @@
 """Sparse symmetric positive-definite factorisations, fastest installed first.
 
-CHOLMOD (package ``sksparse-minimal``, supernodal Cholesky) is preferred; scipy's SuperLU is the
-fallback, with one warning, because its solves with many right-hand sides are several times slower.
+Measured on a 48,000-DOF tet body condensed onto 4,800 face DOFs (2 cores): MKL PARDISO
+(package ``pypardiso``) Schur complement 3 s; CHOLMOD (``sksparse-minimal``; ``cholespy`` alike, bundled
+reference BLAS) solving all retained columns 76-112 s; scipy SuperLU 140-230 s. PARDISO is
+preferred, then CHOLMOD, then SuperLU, with one warning when PARDISO is missing.
 """
 
 from __future__ import annotations
@@ -14,9 +16,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from reduction import pardiso
 from reduction.errors import InputError
 
-SOLVERS = ("cholmod", "splu")
+SOLVERS = ("pardiso", "cholmod", "splu")
 
 
 @dataclass(frozen=True)
@@ -35,25 +38,35 @@ def cholmod_available() -> bool:
     return True
 
 
+def resolve_solver(solver: str) -> str:
+    """Name of the solver to use for "auto" (warns once when PARDISO is missing), else checks the name."""
+    if solver not in ("auto", *SOLVERS):
+        raise InputError(f"unknown solver '{solver}'; choose auto, {', '.join(SOLVERS)}")
+    if solver != "auto":
+        return solver
+    if pardiso.available():
+        return "pardiso"
+    fallback = "cholmod" if cholmod_available() else "splu"
+    warnings.warn(
+        f"pypardiso (MKL PARDISO) not installed: condensation falls back to {fallback}, 10-50x slower "
+        "for large retained sets (pip install pypardiso)",
+        stacklevel=3,
+    )
+    return fallback
+
+
 def factorize(matrix: sp.spmatrix, *, solver: str = "auto", label: str = "matrix") -> Factor:
     """Factorise a sparse symmetric positive-definite matrix.
 
-    solver: "auto" (CHOLMOD if installed, else SuperLU with a warning), "cholmod" or "splu".
+    solver: "auto" (fastest installed), "pardiso", "cholmod" or "splu".
     Raises InputError naming ``label`` when the matrix is singular or not positive definite.
     """
-    if solver not in ("auto", *SOLVERS):
-        raise InputError(f"unknown solver '{solver}'; choose auto, {', '.join(SOLVERS)}")
-    if solver == "auto":
-        if cholmod_available():
-            solver = "cholmod"
-        else:
-            warnings.warn(
-                "sksparse-minimal (CHOLMOD) not installed: using scipy SuperLU, several times slower "
-                "for condensation (pip install sksparse-minimal)",
-                stacklevel=3,
-            )
-            solver = "splu"
+    solver = resolve_solver(solver)
     matrix = sp.csc_matrix(matrix)
+    if solver == "pardiso":
+        factor = pardiso.Cholesky(matrix, label)
+        _check_pivots(matrix, factor.solve, label)
+        return Factor(name="pardiso", solve=factor.solve)
     if solver == "cholmod":
         return _cholmod(matrix, label)
     return _superlu(matrix, label)
