@@ -50,7 +50,9 @@ def history():
     time = np.concatenate([[grid[0]], grid[keep], [grid[-1]]])
     phase = 2 * np.pi * time / 0.5
     bolt_force = 12000.0 + 800.0 * np.sin(phase) + rng.normal(0, 30.0, time.size)
-    interface_displacement = np.column_stack([0.02 * np.sin(phase), 0.01 * np.cos(phase), 1e-4 * rng.normal(size=time.size)])
+    interface_displacement = np.column_stack(
+        [0.02 * np.sin(phase), 0.01 * np.cos(phase), 1e-4 * rng.normal(size=time.size)]
+    )
     wing_acceleration = np.column_stack([3e3 * np.cos(2 * phase), -5e2 * np.sin(phase)])
     signals = {
         "bolt_force": (bolt_force, {"units": "N", "description": "Axial force in bolt 1"}),
@@ -142,7 +144,9 @@ def test_offset_holds_first_and_last_sample_outside_history(exported, history):
     path, _ = exported
     time, _, columns = history
     offset = 0.25
-    result = simulate_fmu(str(path), stop_time=1.0, output_interval=OUTPUT_INTERVAL, start_values={"time_offset": offset})
+    result = simulate_fmu(
+        str(path), stop_time=1.0, output_interval=OUTPUT_INTERVAL, start_values={"time_offset": offset}
+    )
     assert_matches(result, columns, lambda t, values: np.interp(t - offset, time, values))
     first, last = result["time"] < offset, result["time"] > offset + time[-1]
     assert first.any() and last.any()
@@ -307,7 +311,9 @@ def test_missing_results_file_raises(tmp_path):
 
 def test_cli_writes_fmu_and_reports_bad_input(results_file, tmp_path, capsys):
     output = tmp_path / "cli.fmu"
-    code = main_export([str(results_file), "--signals", "bolt_force,wing_acceleration", "--fmi", "3", "-o", str(output)])
+    code = main_export(
+        [str(results_file), "--signals", "bolt_force,wing_acceleration", "--fmi", "3", "-o", str(output)]
+    )
     assert code == 0 and output.exists()
     assert "binary and sources" in capsys.readouterr().out
     code = main_export([str(results_file), "--signals", "nope", "-o", str(tmp_path / "bad.fmu")])
@@ -354,4 +360,5 @@ def test_bench_export_10_signals_100k_samples(tmp_path, fmi_version):
     result = simulate_fmu(str(path), stop_time=time[-1], output_interval=time[-1] / 1000)
     print(f"FMI {fmi_version}: simulate 1000 communication steps over the full history in "
           f"{clock.perf_counter() - start:.2f} s")
-    np.testing.assert_allclose(result["signal_3"], np.interp(result["time"], time, signals["signal_3"][0]), rtol=1e-9, atol=1e-12)
+    expected = np.interp(result["time"], time, signals["signal_3"][0])
+    np.testing.assert_allclose(result["signal_3"], expected, rtol=1e-9, atol=1e-12)
