@@ -1,0 +1,282 @@
+"""The analysis procedure of the paper's section 3: preload, COF phase, wear phase, verdict.
+
+1. Preload: load patterns marked ``ramp`` go from 0 to full in ``preload_increments``.
+2. COF stabilisation: ``cof_cycles`` cycles of the cyclic patterns with COF evolution (if the
+   scene asks for it) and no wear.
+3. Wear: ``wear_cycles`` simulated cycles with wear (if asked), COF frozen or evolving, each
+   standing for ``cycle_jump`` real cycles.
+Each phase stops early once the contact is stationary: no point slipped over
+``stationary_window`` cycles (shakedown to stick). The wear phase also stops when loosening
+is evident: the clamp force has kept falling over the window while the stick area shrank.
+
+No I/O here: every increment and cycle is handed to an observer; the pipeline writes files
+and draws progress bars. Units: mm, N, MPa, mJ.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from contact.law import ContactState, Status, utilised_cof
+from contact.solver import ContactSolver, Effects, Equilibrium
+
+PHASES = ("preload", "cof", "wear")
+HISTORY_SHAPES = ("ramp", "cyclic", "constant")
+
+
+@dataclass(frozen=True)
+class LoadProgram:
+    """How each pattern's amplitude moves in time.
+
+    shapes: pattern name → "ramp" (0→1 in the preload, then held), "cyclic" (0 in the
+    preload, then sin 2πt per cycle) or "constant" (1 throughout).
+    """
+
+    patterns: tuple[str, ...]
+    shapes: dict
+
+    def preload(self, fraction: float) -> np.ndarray:
+        return np.array([fraction if self.shapes[p] == "ramp" else
+                         1.0 if self.shapes[p] == "constant" else 0.0 for p in self.patterns])
+
+    def cycle(self, phase: float) -> np.ndarray:
+        """Amplitudes at the fraction ``phase`` ∈ [0, 1] of a load cycle."""
+        return np.array([np.sin(2 * np.pi * phase) if self.shapes[p] == "cyclic" else 1.0
+                         for p in self.patterns])
+
+
+@dataclass(frozen=True)
+class Procedure:
+    """Settings of the analysis procedure (counts are simulated cycles)."""
+
+    preload_increments: int = 10
+    increments_per_cycle: int = 40
+    cof_cycles: int = 0
+    wear_cycles: int = 0
+    cycle_jump: float = 1.0
+    cof_during_wear: bool = True
+    stationary_window: int = 10
+    loosening_window: int = 20
+    area_tolerance: float = 0.01
+
+
+@dataclass
+class CycleSummary:
+    """Per-point results of one cycle plus its global figures (what the observer records)."""
+
+    cycle: int
+    phase: str
+    equivalent_cycles: float
+    pressure: np.ndarray
+    shear: np.ndarray
+    cof: np.ndarray
+    max_utilised_cof: np.ndarray
+    status: np.ndarray
+    slip_range: np.ndarray
+    dissipation_in_cycle: np.ndarray
+    state: ContactState
+    clamp_force: float | None
+    figures: dict = field(default_factory=dict)
+
+
+@dataclass
+class IncrementRecord:
+    """Global quantities after a converged increment."""
+
+    phase: str
+    cycle: int
+    time: float
+    equilibrium: Equilibrium
+    state: ContactState
+    status: np.ndarray
+    iterations: int
+    max_iterations: int
+    cutbacks: int
+    substeps: int
+
+
+@dataclass
+class RunResult:
+    """What a procedure run ends with: final state, the verdict and its figures."""
+
+    verdict: str
+    stationary: bool
+    figures: dict
+    state: ContactState
+    equilibrium: Equilibrium
+    cycles: list = field(default_factory=list)
+
+
+class Observer:
+    """Receives increments and cycles; the default does nothing. Pipelines subclass it."""
+
+    def increment(self, record: IncrementRecord) -> None:
+        pass
+
+    def cycle(self, summary: CycleSummary) -> None:
+        pass
+
+    def phase(self, name: str, n_cycles: int) -> None:
+        pass
+
+
+def _fractions(area, nominal, mask):
+    return float(area[mask].sum() / nominal) if nominal > 0 else 0.0
+
+
+def cycle_figures(area: np.ndarray, nominal_area: float, status: np.ndarray,
+                  max_utilised: np.ndarray, state: ContactState, cof_initial: np.ndarray,
+                  cof_max, area_tolerance: float) -> dict:
+    """Global figures of a cycle: area fractions, margin, wear, dissipation.
+
+    Fractions refer to the nominal contact area (closed after the preload). The stick margin
+    is 1 − max utilised COF / μ_max over points that stayed stuck.
+    """
+    stuck = status == Status.STICK
+    slipped = status >= Status.SLIP
+    damaged = status == Status.SLIP_AT_MAX
+    wear = state.gap if state.wear_depth is not None else np.zeros_like(area)
+    margins = 1.0 - max_utilised[stuck] / np.broadcast_to(cof_max, area.shape)[stuck]
+    return {
+        "stick_area_fraction": _fractions(area, nominal_area, stuck),
+        "slip_area_fraction": _fractions(area, nominal_area, slipped),
+        "damaged_area_fraction": _fractions(area, nominal_area, damaged),
+        "worn_area_fraction": _fractions(area, nominal_area, np.asarray(wear) > 1e-9),
+        "cof_evolved_area_fraction": _fractions(area, nominal_area, state.cof > cof_initial + 1e-9),
+        "max_wear_depth_mm": float(np.max(wear, initial=0.0)),
+        "wear_volume_mm3": float(np.sum(np.asarray(wear) * area)),
+        "dissipated_energy_mJ": float(np.sum(state.dissipation * area)),
+        "min_stick_margin": float(margins.min()) if margins.size else None,
+    }
+
+
+def _verdict(history: list[CycleSummary], procedure: Procedure, stationary: bool) -> str:
+    last = history[-1].figures
+    tol = procedure.area_tolerance
+    if _loosening(history, procedure):
+        return "loosening"
+    if last["slip_area_fraction"] <= tol:
+        return "stick"
+    return "damage"
+
+
+def _loosening(history: list[CycleSummary], procedure: Procedure) -> bool:
+    """Clamp force kept falling over the window while the stick area did not grow."""
+    wear_cycles = [c for c in history if c.phase == "wear" and c.clamp_force is not None]
+    window = min(procedure.loosening_window, len(wear_cycles))
+    if window < 3:
+        return False
+    recent = wear_cycles[-window:]
+    force = np.array([c.clamp_force for c in recent])
+    stick = np.array([c.figures["stick_area_fraction"] for c in recent])
+    falling = np.all(np.diff(force) <= 0.0) and force[0] - force[-1] > 1e-6 * abs(force[0])
+    return bool(falling and stick[-1] <= stick[0] and recent[-1].figures["slip_area_fraction"] > procedure.area_tolerance)
+
+
+def run(solver: ContactSolver, state: ContactState, program: LoadProgram, procedure: Procedure, *,
+        cof_evolution: bool, wear: bool, observer: Observer | None = None,
+        clamp_force=None, start: Equilibrium | None = None) -> RunResult:
+    """Run the procedure; ``clamp_force(equilibrium) -> N`` reports a bolt/clamp force if any.
+
+    Effects not asked for (``cof_evolution``, ``wear``) are never computed.
+    """
+    observer = observer or Observer()
+    law = solver.law
+    area = solver.area
+    cof_initial = state.cof.copy()
+    equilibrium = start or solver.initial_equilibrium()
+    clock = time.perf_counter()
+
+    def step(amplitudes, effects, phase, cycle, t):
+        nonlocal equilibrium, state
+        equilibrium, state, status, stats = solver.increment(equilibrium, state, amplitudes, effects)
+        observer.increment(IncrementRecord(phase, cycle, t, equilibrium, state, status, stats.iterations,
+                                           stats.max_iterations, stats.cutbacks, stats.substeps))
+        return status
+
+    observer.phase("preload", 0)
+    status = None
+    for k in range(1, procedure.preload_increments + 1):
+        status = step(program.preload(k / procedure.preload_increments), Effects(), "preload", 0,
+                      k / procedure.preload_increments)
+    closed = equilibrium.forces.reshape(solver.n_points, -1)[:, 0] > 0.0
+    nominal_area = float(area[closed].sum())
+
+    history: list[CycleSummary] = []
+    cycle_number = 0
+    stationary = False
+    phases = [("cof", procedure.cof_cycles, Effects(cof_evolution=cof_evolution)),
+              ("wear", procedure.wear_cycles if wear else 0,
+               Effects(cof_evolution=cof_evolution and procedure.cof_during_wear, wear=wear,
+                       cycle_jump=procedure.cycle_jump))]
+    equivalent = 0.0
+    for phase, n_cycles, effects in phases:
+        if n_cycles <= 0:
+            continue
+        observer.phase(phase, n_cycles)
+        quiet_cycles = 0
+        for _ in range(n_cycles):
+            cycle_number += 1
+            n_inc = procedure.increments_per_cycle
+            start_slip = state.slip_vector.copy()
+            low, high = start_slip.copy(), start_slip.copy()
+            start_dissipation = state.dissipation.copy()
+            max_util = np.zeros(solver.n_points)
+            worst = np.zeros(solver.n_points, dtype=np.int8)
+            ever_closed = np.zeros(solver.n_points, dtype=bool)
+            for k in range(1, n_inc + 1):
+                status = step(program.cycle(k / n_inc), effects, phase, cycle_number,
+                              cycle_number - 1 + k / n_inc)
+                response_util = _utilisation(equilibrium, solver)
+                max_util = np.maximum(max_util, response_util)
+                worst = np.maximum(worst, status)
+                ever_closed |= status != Status.OPEN
+                low = np.minimum(low, state.slip_vector)
+                high = np.maximum(high, state.slip_vector)
+            equivalent += effects.cycle_jump if phase == "wear" else 1.0
+            cycle_status = np.where(ever_closed, np.maximum(worst, Status.STICK), Status.OPEN).astype(np.int8)
+            per_point = equilibrium.forces.reshape(solver.n_points, -1) / area[:, None]
+            summary = CycleSummary(
+                cycle=cycle_number, phase=phase, equivalent_cycles=equivalent,
+                pressure=per_point[:, 0], shear=per_point[:, 1:], cof=state.cof.copy(),
+                max_utilised_cof=max_util, status=cycle_status,
+                slip_range=np.linalg.norm(high - low, axis=1),
+                dissipation_in_cycle=state.dissipation - start_dissipation, state=state,
+                clamp_force=None if clamp_force is None else float(clamp_force(equilibrium)))
+            summary.figures = cycle_figures(area, nominal_area, cycle_status, max_util, state,
+                                            cof_initial, law.cof_max, procedure.area_tolerance)
+            summary.figures["clamp_force_N"] = summary.clamp_force
+            history.append(summary)
+            observer.cycle(summary)
+            slipped = summary.figures["slip_area_fraction"] > 0.0
+            quiet_cycles = 0 if slipped else quiet_cycles + 1
+            if quiet_cycles >= procedure.stationary_window:
+                stationary = True
+                break
+            if phase == "wear" and _loosening(history, procedure):
+                break
+        if stationary:
+            break
+    if not history:
+        raise ValueError("the procedure has no load cycles: set cof_cycles or wear_cycles > 0")
+    figures = dict(history[-1].figures)
+    figures["cycles_run"] = cycle_number
+    figures["equivalent_cycles"] = equivalent
+    figures["nominal_contact_area"] = nominal_area
+    figures["wall_time_s"] = time.perf_counter() - clock
+    verdict = _verdict(history, procedure, stationary)
+    return RunResult(verdict, stationary, figures, state, equilibrium, history)
+
+
+def _utilisation(equilibrium: Equilibrium, solver: ContactSolver) -> np.ndarray:
+    per_point = equilibrium.forces.reshape(solver.n_points, -1)
+    normal = per_point[:, 0]
+    shear = np.linalg.norm(per_point[:, 1:], axis=1)
+    return np.divide(shear, normal, out=np.zeros_like(shear), where=normal > 0.0)
+
+
+__all__ = ["LoadProgram", "Procedure", "run", "Observer", "CycleSummary", "IncrementRecord",
+           "RunResult", "cycle_figures", "utilised_cof"]

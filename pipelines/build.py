@@ -1,0 +1,148 @@
+"""Build the physics objects of a validated :class:`pipelines.scene.Scene`.
+
+Meshes come from the shipped generators or from files (meshio through ``reduction``);
+bodies are assembled and condensed; the contact law, the load program and the procedure
+are read from the scene. Only what the scene's effects call for is created.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from contact.assembly import Assembly, Body, ReferencePoint, assemble
+from contact.law import ContactLaw, ContactState
+from contact.procedure import LoadProgram, Procedure
+from contact.solver import NewtonSettings
+from pipelines import meshes
+from pipelines.scene import Scene
+from reduction.elasticity import assemble_elastic_body
+from reduction.errors import InputError
+
+AXES = {"x": 0, "y": 1, "z": 2}
+COMPONENTS = {"ux": 0, "uy": 1, "uz": 2}
+
+
+@dataclass(frozen=True)
+class Model:
+    """Everything a run needs, built from a scene."""
+
+    scene: Scene
+    assembly: Assembly
+    law: ContactLaw
+    program: LoadProgram
+    procedure: Procedure
+    settings: NewtonSettings
+    meshes: dict
+
+    def initial_state(self) -> ContactState:
+        n_tangent = self.scene.dimension - 1
+        wear_bodies = 2 if "wear" in self.scene.effects else None
+        return ContactState.initial(self.assembly.structure.n_points, n_tangent,
+                                    self.scene.data["contact"]["cof_initial"], wear_bodies)
+
+
+def select_points(coordinates: np.ndarray, selection: dict, where: str) -> np.ndarray:
+    """Boolean mask of points (n, dim) inside a box or on a plane (mm, tolerance 1e-6·size)."""
+    if "box" in selection:
+        low, high = (np.asarray(c, dtype=float) for c in selection["box"])
+        return np.all((coordinates >= low) & (coordinates <= high), axis=1)
+    axis = AXES[selection["axis"]]
+    span = float(np.ptp(coordinates)) or 1.0
+    tolerance = selection.get("tolerance", 1e-6 * span)
+    return np.abs(coordinates[:, axis] - selection["value"]) <= tolerance
+
+
+def select_nodes(mesh, selection: dict, where: str) -> np.ndarray:
+    nodes = np.flatnonzero(select_points(mesh.p.T, selection, where))
+    if nodes.size == 0:
+        raise InputError(f"'{where}' selects no nodes of the mesh; check its coordinates")
+    return nodes
+
+
+def select_facets(mesh, selection: dict, where: str) -> np.ndarray:
+    """Boundary facets whose nodes all lie in the selection."""
+    boundary = mesh.boundary_facets()
+    inside = select_points(mesh.p.T, selection, where)
+    facets = boundary[np.all(inside[mesh.facets[:, boundary]], axis=0)]
+    if facets.size == 0:
+        raise InputError(f"'{where}' selects no boundary facets of the mesh; check the box or plane")
+    return facets
+
+
+def make_mesh(spec: dict, where: str, base: Path | None):
+    if "generator" in spec:
+        generator = spec["generator"]
+        args = {k: v for k, v in spec.items() if k != "generator"}
+        try:
+            return getattr(meshes, generator)(**args)
+        except TypeError as error:
+            raise InputError(f"'{where}': {error}") from None
+    path = Path(spec["file"])
+    if base is not None and not path.is_absolute():
+        path = base / path
+    try:
+        from reduction.mesh_io import read_mesh
+    except ImportError:
+        raise InputError(f"'{where}.file': reading mesh files needs reduction.mesh_io, "
+                         "which is not available in this installation") from None
+    return read_mesh(path).mesh
+
+
+def build(scene: Scene) -> Model:
+    """Assemble and condense the scene's bodies and read its law, loads and procedure."""
+    data = scene.data
+    dim = scene.dimension
+    base = scene.path.parent if scene.path else None
+    bodies, built_meshes = [], {}
+    for name, spec in data["bodies"].items():
+        mesh = make_mesh(spec["mesh"], f"bodies.{name}.mesh", base)
+        if mesh.dim() != dim:
+            raise InputError(f"'bodies.{name}.mesh' is {mesh.dim()}D but the scene is {dim}D")
+        built_meshes[name] = mesh
+        material = data["materials"][spec["material"]]
+        elastic = assemble_elastic_body(mesh, material["youngs_modulus"], material["poisson_ratio"],
+                                        material.get("density"))
+        fixed = spec.get("fixed")
+        fixed_nodes = select_nodes(mesh, fixed["nodes"], f"bodies.{name}.fixed.nodes") if fixed else np.zeros(0, int)
+        components = tuple(COMPONENTS[c] for c in (fixed or {}).get("components", ["ux", "uy", "uz"][:dim]))
+        references = {}
+        for ref_name, ref in spec.get("reference_points", {}).items():
+            nodes = select_nodes(mesh, ref["nodes"], f"bodies.{name}.reference_points.{ref_name}.nodes")
+            references[ref_name] = ReferencePoint(nodes, np.asarray(ref["position"], float),
+                                                  bool(ref.get("rotations", False)))
+        bodies.append(Body(name, elastic, fixed_nodes, components, references))
+    contact = data["contact"]
+    slave_mesh = built_meshes[contact["slave"]["body"]]
+    master_mesh = built_meshes[contact["master"]["body"]]
+    slave = (contact["slave"]["body"], select_facets(slave_mesh, contact["slave"], "contact.slave"))
+    master = (contact["master"]["body"], select_facets(master_mesh, contact["master"], "contact.master"))
+
+    def patterns(kind):
+        out = {}
+        for entry in data.get(kind, []):
+            body, point, comp = entry["dof"].split(".")
+            out[entry["name"]] = [(body, point, comp, float(entry["value"]))]
+        return out
+
+    assembly = assemble(bodies, slave, master, loads=patterns("loads"), motions=patterns("motions"),
+                        search_distance=contact.get("search_distance", np.inf))
+    shapes = {e["name"]: e["history"] for kind in ("loads", "motions") for e in data.get(kind, [])}
+    program = LoadProgram(assembly.structure.patterns, shapes)
+    law = ContactLaw(
+        normal_stiffness=contact["normal_stiffness"],
+        critical_slip=contact["critical_slip"],
+        cof_max=contact["cof_max"],
+        cof_rate=contact.get("cof_rate", 0.0) if "cof_evolution" in scene.effects else 0.0,
+        wear_coefficients=tuple(contact.get("wear_coefficients", [0.0, 0.0])),
+        pressure_limit=contact.get("pressure_limit", 0.0),
+        wear_form=contact.get("wear_form", "pressure"),
+    )
+    proc = data.get("procedure", {})
+    procedure = Procedure(**{k: v for k, v in proc.items()
+                             if k in Procedure.__dataclass_fields__})
+    settings = NewtonSettings(wear_cap=proc.get("wear_cap", np.inf),
+                              max_cutbacks=proc.get("max_cutbacks", NewtonSettings.max_cutbacks))
+    return Model(scene, assembly, law, program, procedure, settings, built_meshes)

@@ -1,0 +1,313 @@
+"""Scene files: TOML in, a validated :class:`Scene` out.
+
+A scene names its bodies (mesh, material, supports, reference points), the contact
+interface and its law, the load and motion patterns with their time histories, the
+procedure, and the *effects* it wants (``cof_evolution``, ``wear``). Validation reports every
+problem at once, each naming its key, and nothing is built before the scene is valid.
+Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
+"""
+
+from __future__ import annotations
+
+import difflib
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from reduction.errors import InputError
+
+KNOWN_EFFECTS = ("cof_evolution", "wear", "bolts")
+MESH_GENERATORS = {
+    "cylinder_block": ("radius", "half_width", "height", "contact_half_width", "contact_size"),
+    "plane_block": ("half_width", "depth", "contact_half_width", "contact_size"),
+    "flat_block": ("size_x", "size_y", "height", "n_x", "n_y", "n_z"),
+}
+
+
+def _positive(value):
+    return None if value > 0 else "must be > 0"
+
+
+def _non_negative(value):
+    return None if value >= 0 else "must be >= 0"
+
+
+def _poisson(value):
+    return None if -1.0 < value < 0.5 else "must lie between -1 and 0.5"
+
+
+def _cof(value):
+    return None if 0 <= value <= 5 else "must lie between 0 and 5"
+
+
+def _integer_at_least(n):
+    return lambda value: None if value >= n else f"must be >= {n}"
+
+
+NUMBER = (int, float)
+# key → (types, required, check, meaning with units). "*" marks a table of named entries.
+SCHEMA = {
+    "scene": {
+        "name": (str, True, None, "scene name"),
+        "description": (str, False, None, "one-line description"),
+        "dimension": (int, True, lambda v: None if v in (2, 3) else "must be 2 or 3", "2 (plane strain) or 3"),
+        "effects": (list, True, None, f"list of effects from {KNOWN_EFFECTS}"),
+    },
+    "materials.*": {
+        "youngs_modulus": (NUMBER, True, _positive, "Young's modulus E, MPa"),
+        "poisson_ratio": (NUMBER, True, _poisson, "Poisson's ratio"),
+        "density": (NUMBER, False, _positive, "density, t/mm³"),
+    },
+    "bodies.*": {
+        "material": (str, True, None, "name of a [materials] entry"),
+        "mesh": (dict, True, None, "{ generator = ..., ... } or { file = ... }"),
+        "fixed": (dict, False, None, "{ nodes = selection, components = [...] }"),
+        "reference_points": (dict, False, None, "named control points"),
+    },
+    "contact": {
+        "slave": (dict, True, None, "{ body = ..., box/plane selection of facets }"),
+        "master": (dict, True, None, "{ body = ..., box/plane selection of facets }"),
+        "normal_stiffness": (NUMBER, True, _positive, "kn, N/mm³"),
+        "critical_slip": (NUMBER, True, _positive, "γ_crit, mm"),
+        "cof_initial": (NUMBER, True, _cof, "μ₀"),
+        "cof_max": (NUMBER, True, _cof, "μ_max"),
+        "cof_rate": (NUMBER, False, _non_negative, "k, mm/N"),
+        "wear_coefficients": (list, False, None, "[w_slave, w_master], mm²/N"),
+        "pressure_limit": (NUMBER, False, _non_negative, "p_lim, MPa"),
+        "wear_form": (str, False, lambda v: None if v in ("pressure", "shear") else
+                      "must be 'pressure' or 'shear'", "Archard driver"),
+        "search_distance": (NUMBER, False, _positive, "largest slave-master distance, mm"),
+    },
+    "procedure": {
+        "preload_increments": (int, False, _integer_at_least(1), "increments of the preload"),
+        "increments_per_cycle": (int, False, _integer_at_least(2), "increments per load cycle"),
+        "cof_cycles": (int, False, _integer_at_least(0), "COF stabilisation cycles"),
+        "wear_cycles": (int, False, _integer_at_least(0), "simulated wear cycles"),
+        "cycle_jump": (NUMBER, False, lambda v: None if v >= 1 else "must be >= 1", "J"),
+        "cof_during_wear": (bool, False, None, "keep COF evolving in the wear phase"),
+        "wear_cap": (NUMBER, False, _positive, "largest wear increment per step, mm"),
+        "stationary_window": (int, False, _integer_at_least(1), "cycles without slip for shakedown"),
+        "loosening_window": (int, False, _integer_at_least(3), "cycles of falling clamp force"),
+        "max_cutbacks": (int, False, _integer_at_least(0), "halvings of a failing increment"),
+        "record_every": (int, False, _integer_at_least(1), "store fields every n cycles"),
+    },
+}
+PATTERN_KEYS = {
+    "name": (str, True, None, "pattern name"),
+    "dof": (str, True, None, "control DOF 'body.point.component'"),
+    "value": (NUMBER, True, None, "full amplitude, N or mm"),
+    "history": (str, True, lambda v: None if v in ("ramp", "cyclic", "constant") else
+                "must be 'ramp', 'cyclic' or 'constant'", "time shape"),
+}
+TOP_LEVEL = ("scene", "materials", "bodies", "contact", "loads", "motions", "procedure")
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene: the parsed TOML tables and where it came from."""
+
+    data: dict
+    path: Path | None
+
+    @property
+    def name(self) -> str:
+        return self.data["scene"]["name"]
+
+    @property
+    def effects(self) -> frozenset:
+        return frozenset(self.data["scene"]["effects"])
+
+    @property
+    def dimension(self) -> int:
+        return self.data["scene"]["dimension"]
+
+    def section(self, name: str) -> dict:
+        return self.data.get(name, {})
+
+
+def _suggest(key: str, known) -> str:
+    close = difflib.get_close_matches(key, list(known), n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def _check_table(table, schema, where, problems):
+    if not isinstance(table, dict):
+        problems.append(f"'{where}' must be a table")
+        return
+    for key in table:
+        if key not in schema:
+            problems.append(f"unknown key '{where}.{key}'{_suggest(key, schema)}")
+    for key, (types, required, check, meaning) in schema.items():
+        if key not in table:
+            if required:
+                problems.append(f"missing key '{where}.{key}' ({meaning})")
+            continue
+        value = table[key]
+        if isinstance(value, bool) and types is not bool and bool not in (types if isinstance(types, tuple) else (types,)):
+            problems.append(f"'{where}.{key}' must be a number, got {value!r}")
+            continue
+        if not isinstance(value, types):
+            expected = types.__name__ if isinstance(types, type) else "number"
+            problems.append(f"'{where}.{key}' must be a {expected} ({meaning}), got {value!r}")
+            continue
+        if check is not None:
+            message = check(value)
+            if message:
+                problems.append(f"'{where}.{key}' {message} ({meaning}), got {value!r}")
+
+
+def _check_selection(selection, where, dim, problems):
+    keys = set(selection) - {"body"}
+    if not keys:
+        problems.append(f"'{where}' needs a selection: box = [[min...], [max...]] or plane = {{ axis, value }}")
+    for key in keys:
+        if key == "box":
+            box = selection["box"]
+            if not (isinstance(box, list) and len(box) == 2 and all(
+                    isinstance(c, list) and len(c) == dim and all(isinstance(v, NUMBER) for v in c) for c in box)):
+                problems.append(f"'{where}.box' must be [[min x, y{', z' if dim == 3 else ''}], [max ...]] in mm")
+        elif key == "axis":
+            if selection["axis"] not in ("x", "y", "z")[:dim]:
+                problems.append(f"'{where}.axis' must be one of {('x', 'y', 'z')[:dim]}")
+            if not isinstance(selection.get("value"), NUMBER):
+                problems.append(f"'{where}.value' must be the coordinate (mm) of the plane")
+        elif key not in ("value", "tolerance"):
+            problems.append(f"unknown key '{where}.{key}'{_suggest(key, ['box', 'axis', 'value', 'tolerance'])}")
+
+
+def validate(data: dict, source: str = "scene") -> list[str]:
+    """All problems of a parsed scene, each a sentence naming its key; empty when valid."""
+    problems: list[str] = []
+    for key in data:
+        if key not in TOP_LEVEL:
+            problems.append(f"unknown table '{key}'{_suggest(key, TOP_LEVEL)}")
+    for section in ("scene", "contact"):
+        if section not in data:
+            problems.append(f"missing table '[{section}]'")
+    for section, schema in SCHEMA.items():
+        if section.endswith(".*"):
+            parent = section[:-2]
+            entries = data.get(parent, {})
+            if not isinstance(entries, dict) or not entries:
+                problems.append(f"'[{parent}]' must define at least one named entry")
+                continue
+            for name, table in entries.items():
+                _check_table(table, schema, f"{parent}.{name}", problems)
+        elif section in data:
+            _check_table(data[section], schema, section, problems)
+    if problems:
+        return problems
+    scene = data["scene"]
+    dim = scene["dimension"]
+    for effect in scene["effects"]:
+        if effect not in KNOWN_EFFECTS:
+            problems.append(f"unknown effect '{effect}' in 'scene.effects'{_suggest(str(effect), KNOWN_EFFECTS)}")
+    materials, bodies = data["materials"], data["bodies"]
+    for name, body in bodies.items():
+        if body["material"] not in materials:
+            problems.append(f"'bodies.{name}.material' names '{body['material']}', which is not in [materials]")
+        mesh = body["mesh"]
+        if "generator" in mesh:
+            generator = mesh["generator"]
+            if generator not in MESH_GENERATORS:
+                problems.append(f"'bodies.{name}.mesh.generator' '{generator}' is unknown"
+                                f"{_suggest(generator, MESH_GENERATORS)}")
+            else:
+                for key in MESH_GENERATORS[generator]:
+                    if not isinstance(mesh.get(key), NUMBER) or mesh.get(key) <= 0:
+                        problems.append(f"'bodies.{name}.mesh.{key}' must be a positive number (mm or count)")
+        elif "file" not in mesh:
+            problems.append(f"'bodies.{name}.mesh' needs 'generator' or 'file'")
+        if "fixed" in body:
+            fixed = body["fixed"]
+            if "nodes" not in fixed:
+                problems.append(f"'bodies.{name}.fixed.nodes' is missing (a selection)")
+            else:
+                _check_selection(fixed["nodes"], f"bodies.{name}.fixed.nodes", dim, problems)
+            for comp in fixed.get("components", []):
+                if comp not in ("ux", "uy", "uz")[:dim]:
+                    problems.append(f"'bodies.{name}.fixed.components' has '{comp}'; use ux, uy{', uz' if dim == 3 else ''}")
+        for ref_name, ref in body.get("reference_points", {}).items():
+            where = f"bodies.{name}.reference_points.{ref_name}"
+            for key in ref:
+                if key not in ("nodes", "position", "rotations"):
+                    problems.append(f"unknown key '{where}.{key}'{_suggest(key, ['nodes', 'position', 'rotations'])}")
+            if "nodes" not in ref:
+                problems.append(f"'{where}.nodes' is missing (a selection)")
+            else:
+                _check_selection(ref["nodes"], f"{where}.nodes", dim, problems)
+            position = ref.get("position")
+            if not (isinstance(position, list) and len(position) == dim):
+                problems.append(f"'{where}.position' must be {dim} coordinates in mm")
+    contact = data["contact"]
+    for role in ("slave", "master"):
+        selection = contact[role]
+        if selection.get("body") not in bodies:
+            problems.append(f"'contact.{role}.body' must name one of the bodies ({', '.join(bodies)})")
+        _check_selection(selection, f"contact.{role}", dim, problems)
+    if contact["cof_max"] < contact["cof_initial"]:
+        problems.append("'contact.cof_max' must be >= 'contact.cof_initial'")
+    wear = contact.get("wear_coefficients", [0.0, 0.0])
+    if len(wear) != 2 or not all(isinstance(w, NUMBER) and w >= 0 for w in wear):
+        problems.append("'contact.wear_coefficients' must be two non-negative numbers [slave, master], mm²/N")
+    if "wear" in scene["effects"] and not any(wear):
+        problems.append("effect 'wear' is listed but 'contact.wear_coefficients' are zero or missing")
+    if "cof_evolution" in scene["effects"] and not contact.get("cof_rate"):
+        problems.append("effect 'cof_evolution' is listed but 'contact.cof_rate' is zero or missing")
+    names = set()
+    for kind in ("loads", "motions"):
+        entries = data.get(kind, [])
+        if not isinstance(entries, list):
+            problems.append(f"'{kind}' must be an array of tables ([[{kind}]])")
+            continue
+        for k, entry in enumerate(entries):
+            _check_table(entry, PATTERN_KEYS, f"{kind}[{k}]", problems)
+            if isinstance(entry, dict) and entry.get("name") in names:
+                problems.append(f"'{kind}[{k}].name' '{entry['name']}' is used twice")
+            if isinstance(entry, dict):
+                names.add(entry.get("name"))
+                dof = entry.get("dof", "")
+                if isinstance(dof, str) and dof.count(".") != 2:
+                    problems.append(f"'{kind}[{k}].dof' must read 'body.point.component', got {dof!r}")
+    if not names:
+        problems.append("the scene has no [[loads]] or [[motions]]")
+    return problems
+
+
+def parse(text: str, source: str = "scene", path: Path | None = None) -> Scene:
+    """Parse and validate TOML text; raises :class:`InputError` listing every problem."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise InputError(f"{source}: not valid TOML: {error}") from None
+    problems = validate(data, source)
+    if problems:
+        raise InputError(f"{source}: " + ("\n  - ".join([f"{len(problems)} problem(s):"] + problems)
+                                          if len(problems) > 1 else problems[0]))
+    return Scene(data, path)
+
+
+def load(path: str | Path, overrides: dict | None = None) -> Scene:
+    """Read a scene file; ``overrides`` {"procedure.wear_cycles": 5, ...} replace values first."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"scene file {path} does not exist")
+    text = path.read_text()
+    if overrides:
+        data = tomllib.loads(text)
+        apply_overrides(data, overrides)
+        problems = validate(data, str(path))
+        if problems:
+            raise InputError(f"{path}: " + "; ".join(problems))
+        return Scene(data, path)
+    return parse(text, str(path), path)
+
+
+def apply_overrides(data: dict, overrides: dict) -> None:
+    """Set dotted keys in place, e.g. {"bodies.plane.mesh.contact_size": 0.1}."""
+    for dotted, value in overrides.items():
+        node = data
+        *parents, leaf = dotted.split(".")
+        for key in parents:
+            node = node.setdefault(key, {})
+        node[leaf] = value
