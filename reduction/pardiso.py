@@ -136,6 +136,8 @@ class Cholesky:
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         rhs = np.asarray(rhs, dtype=np.float64)
         n_rhs = 1 if rhs.ndim == 1 else rhs.shape[1]
+        if n_rhs == 0:
+            return np.zeros_like(rhs)
         # PARDISO wants each right-hand side contiguous (column-major)
         columns = np.ascontiguousarray(rhs.T)
         out = np.zeros_like(columns)

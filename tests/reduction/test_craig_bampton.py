@@ -87,3 +87,11 @@ def test_bad_requests_are_named(cantilever):
         craig_bampton(k, m, interface, 2, fixed=np.concatenate([fixed, interface[:1]]))
     with pytest.raises(InputError, match="must be >= 0"):
         craig_bampton(k, m, interface, -1, fixed=fixed)
+
+
+@pytest.mark.parametrize("solver", ["pardiso", "splu"])
+def test_no_interface_gives_clamped_normal_modes_only(cantilever, solver):
+    k, m, interface, fixed, _ = cantilever
+    cb = craig_bampton(k, m, [], 3, fixed=np.concatenate([fixed, interface]), solver=solver)
+    assert cb.basis.shape == (k.shape[0], 3)
+    assert cb.fixed_interface_frequencies_hz[0] > 1000.0  # bar clamped at both ends

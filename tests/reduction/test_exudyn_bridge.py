@@ -1,0 +1,131 @@
+"""Reduced bodies handed to exudyn (ObjectFFRFreducedOrder) against the full sparse model."""
+
+import numpy as np
+import pytest
+import scipy.sparse.linalg as spla
+import skfem
+
+exu = pytest.importorskip("exudyn")
+from exudyn.itemInterface import (  # noqa: E402
+    GenericJoint, LoadForceVector, MarkerBodyRigid, MarkerNodeRigid, MarkerSuperElementPosition,
+    ObjectGround, SensorSuperElement,
+)
+
+from reduction.coupling import rigid_couplings  # noqa: E402
+from reduction.elasticity import assemble_elastic_body  # noqa: E402
+from reduction.errors import InputError  # noqa: E402
+from reduction.exudyn_bridge import add_floating_body, floating_frame_modes, surface_triangles  # noqa: E402
+
+FORCE = np.array([0.0, 0.0, -100.0])  # N, step load on the tip face
+STEP = 2e-5  # s
+END_TIME = 0.01  # s, two periods of the first bending mode (224 Hz)
+
+
+@pytest.fixture(scope="module")
+def beam():
+    """Steel bar 200 x 20 x 10 mm (1845 DOFs); root face x = 0, tip face x = 200."""
+    mesh = skfem.MeshHex.init_tensor(np.linspace(0, 200, 41), np.linspace(0, 20, 5), np.linspace(0, 10, 3))
+    body = assemble_elastic_body(mesh, 210_000.0, 0.3, 7.85e-9)
+    x = body.coordinates
+    root = np.flatnonzero(np.isclose(x[:, 0], 0))
+    tip = np.flatnonzero(np.isclose(x[:, 0], 200))
+    return body, root, tip
+
+
+def _newmark_full_model(stiffness, mass, load, steps, observe):
+    """Average-acceleration Newmark (trapezoidal) on the full sparse model, starting at rest."""
+    effective = spla.splu((stiffness + 4 / STEP**2 * mass).tocsc())
+    u = np.zeros(stiffness.shape[0])
+    v = np.zeros_like(u)
+    a = spla.spsolve(mass.tocsc(), load)
+    history = [observe @ u]
+    for _ in range(steps):
+        u_new = effective.solve(load + mass @ (4 / STEP**2 * u + 4 / STEP * v + a))
+        a_new = 4 / STEP**2 * (u_new - u) - 4 / STEP * v - a
+        v = v + STEP / 2 * (a + a_new)
+        u, a = u_new, a_new
+        history.append(observe @ u)
+    return np.array(history)
+
+
+def test_clamped_reduced_beam_step_load_matches_full_transient(beam):
+    body, root, tip = beam
+    modes = floating_frame_modes(body, [root, tip], n_modes=10)
+    system = exu.SystemContainer()
+    mbs = system.AddSystem()
+    items = add_floating_body(mbs, body, modes)
+    ground = mbs.AddObject(ObjectGround())
+    mbs.AddObject(GenericJoint(markerNumbers=[
+        mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=[0, 0, 0])),
+        mbs.AddMarker(MarkerNodeRigid(nodeNumber=items.rigid_body_node)),
+    ], constrainedAxes=[1] * 6))
+    tip_marker = mbs.AddMarker(MarkerSuperElementPosition(
+        bodyNumber=items.object, meshNodeNumbers=modes.interface_nodes[1], weightingFactors=modes.interface_weights[1]))
+    mbs.AddLoad(LoadForceVector(markerNumber=tip_marker, loadVector=list(FORCE)))
+    x = body.coordinates
+    tip_centre = int(tip[np.argmin(np.linalg.norm(x[tip] - [200.0, 10.0, 5.0], axis=1))])
+    sensor = mbs.AddSensor(SensorSuperElement(bodyNumber=items.object, meshNodeNumber=tip_centre, storeInternal=True,
+                                              outputVariableType=exu.OutputVariableType.Displacement))
+    mbs.Assemble()
+    settings = exu.SimulationSettings()
+    steps = int(round(END_TIME / STEP))
+    settings.timeIntegration.numberOfSteps = steps
+    settings.timeIntegration.endTime = END_TIME
+    settings.timeIntegration.generalizedAlpha.useNewmark = True
+    settings.timeIntegration.generalizedAlpha.spectralRadius = 1.0
+    settings.timeIntegration.verboseMode = 0
+    settings.solution.file.write = False
+    settings.solution.sensors.writePeriod = STEP
+    exu.SolveDynamic(mbs, settings)
+    reduced = mbs.GetSensorStoredData(sensor)[:, 3]
+
+    # full model: same clamp, same rigid tip face (RBE2 at the face centroid), same load and step
+    coupling = rigid_couplings(body.n_dofs, body.node_dofs, x, [(tip, x[tip].mean(axis=0))], rotations=True)
+    k = coupling.reduce_matrix(body.stiffness)
+    m = coupling.reduce_matrix(body.mass)
+    free = np.setdiff1d(np.arange(k.shape[0]), coupling.kept[body.node_dofs[root].ravel()])
+    load = np.zeros(k.shape[0])
+    load[coupling.reference_dofs[0, :3]] = FORCE
+    observe = coupling.transformation[body.node_dofs[tip_centre, 2]][:, free].toarray().ravel()
+    full = _newmark_full_model(k[free][:, free], m[free][:, free], load[free], steps, observe)
+
+    assert reduced.shape == full.shape
+    assert np.abs(full).max() > 1.0  # mm: a real dynamic response (overshoot of the 0.66 mm static sag)
+    assert np.abs(reduced - full).max() < 0.01 * np.abs(full).max()
+
+
+def test_free_reduced_body_eigenfrequencies_match_full_model(beam):
+    body, root, tip = beam
+    modes = floating_frame_modes(body, [root, tip], n_modes=20)
+    system = exu.SystemContainer()
+    mbs = system.AddSystem()
+    add_floating_body(mbs, body, modes)
+    mbs.Assemble()
+    eigenvalues, _ = mbs.ComputeODE2Eigenvalues()
+    reduced_hz = np.sqrt(np.sort(np.abs(eigenvalues))[6:12]) / (2 * np.pi)
+
+    # full free-free model with the same rigid root and tip faces
+    x = body.coordinates
+    coupling = rigid_couplings(body.n_dofs, body.node_dofs, x,
+                               [(root, modes.reference_points[0]), (tip, modes.reference_points[1])], rotations=True)
+    values = spla.eigsh(coupling.reduce_matrix(body.stiffness).tocsc(), k=12,
+                        M=coupling.reduce_matrix(body.mass).tocsc(), sigma=-1e3, return_eigenvectors=False)
+    full_hz = np.sqrt(np.sort(values)[6:]) / (2 * np.pi)
+    assert full_hz[0] > 1000.0  # free-free bending, far above the 224 Hz of the clamped beam
+    np.testing.assert_allclose(reduced_hz, full_hz, rtol=0.005)
+
+
+def test_surface_triangles_point_outwards(beam):
+    body = beam[0]
+    triangles = surface_triangles(body)
+    p = body.mesh.p.T
+    normals = np.cross(p[triangles[:, 1]] - p[triangles[:, 0]], p[triangles[:, 2]] - p[triangles[:, 0]])
+    # divergence theorem: the enclosed volume from outward normals is the bar's volume
+    volume = np.einsum("ij,ij->", normals, p[triangles].mean(axis=1)) / 6.0
+    assert volume == pytest.approx(200 * 20 * 10, rel=1e-12)
+
+
+def test_two_dimensional_body_is_refused(beam):
+    flat = assemble_elastic_body(skfem.MeshTri().refined(1), 1000.0, 0.3, 1e-9)
+    with pytest.raises(InputError, match="3D"):
+        floating_frame_modes(flat, [np.array([0, 1])], n_modes=1)
