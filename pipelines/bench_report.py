@@ -1,0 +1,179 @@
+"""The 3D flat-on-flat benchmark: one case, one cyclic partial-slip history, two solvers.
+
+Two equal square blocks of hexahedra touch on z = 0. The lower block is clamped at its
+bottom; the top face of the upper block is rigidly coupled to a reference point that is
+pressed down (force control) and then moved tangentially back and forth (displacement
+control). The slave face (upper block) has ``points_per_side``² nodes: the contact points.
+The rigid top and the finite blocks give stress peaks at the edges, so the edges slip while
+the centre sticks (partial slip), and the COF evolves where the points slide.
+
+Used by the benchmark (tests/bench) and the condensed-versus-full comparison test. Pure
+functions return data; nothing here prints. Units: mm, N, MPa, s.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+import tracemalloc
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from contact.assembly import Body, ReferencePoint
+from contact.law import ContactLaw, ContactState
+from contact.solver import Effects
+from pipelines.meshes import flat_block
+from reduction.elasticity import assemble_elastic_body
+
+
+@dataclass(frozen=True)
+class FlatOnFlat:
+    """Inputs of :func:`contact.assembly.assemble` and :func:`contact.full_model.build` for the case.
+
+    history: (n_increments, 2) amplitudes of the patterns ("normal" N, "tangential" mm).
+    cycle: slice of ``history`` rows that make one full tangential cycle (+δ → −δ → +δ).
+    """
+
+    bodies: list
+    slave: tuple
+    master: tuple
+    loads: dict
+    motions: dict
+    law: ContactLaw
+    cof0: float
+    effects: Effects
+    history: np.ndarray
+    cycle: slice
+
+    def initial_state(self, n_points: int) -> ContactState:
+        return ContactState.initial(n_points, 2, self.cof0)
+
+
+def flat_on_flat(points_per_side: int, *, size: float = 10.0, height: float = 5.0,
+                 layers: int = 6, pressure: float = 100.0, slip_amplitude: float = 2.0e-3,
+                 increments_per_quarter: int = 5, cycles: int = 1,
+                 youngs_modulus: float = 210e3, poisson_ratio: float = 0.3) -> FlatOnFlat:
+    """Two ``size``×``size``×``height`` mm blocks, ``points_per_side``² contact points.
+
+    pressure: nominal contact pressure (MPa) applied as a force on the reference point.
+    slip_amplitude: tangential reference-point motion amplitude (mm) in x.
+    history: the normal load in one increment, then a quarter cycle to +δ and ``cycles`` full
+    cycles, each quarter in ``increments_per_quarter`` increments.
+    """
+    n_el = points_per_side - 1
+    upper = flat_block(size, size, height, n_el, n_el, layers, z0=0.0, z_growth=1.4)
+    lower = flat_block(size, size, height, n_el, n_el, layers, z0=-height, z_growth=1.4, top_fine=True)
+    upper_body = assemble_elastic_body(upper, youngs_modulus, poisson_ratio)
+    lower_body = assemble_elastic_body(lower, youngs_modulus, poisson_ratio)
+    top = np.flatnonzero(np.isclose(upper.p[2], height))
+    bottom = np.flatnonzero(np.isclose(lower.p[2], -height))
+    bodies = [
+        Body("punch", upper_body, reference_points={"rp": ReferencePoint(top, np.array([0.0, 0.0, height]))}),
+        Body("base", lower_body, fixed_nodes=bottom, fixed_components=(0, 1, 2)),
+    ]
+    slave = ("punch", upper.facets_satisfying(lambda x: np.isclose(x[2], 0.0), boundaries_only=True))
+    master = ("base", lower.facets_satisfying(lambda x: np.isclose(x[2], 0.0), boundaries_only=True))
+    force = pressure * size * size
+    loads = {"normal": [("punch", "rp", "uz", -1.0)]}
+    motions = {"tangential": [("punch", "rp", "ux", 1.0)]}
+    law = ContactLaw(normal_stiffness=4e6, critical_slip=1e-3, cof_max=0.7, cof_rate=2.0)
+    n = increments_per_quarter
+    quarter = np.linspace(0.0, 1.0, n + 1)[1:]
+    one_cycle = np.concatenate([1.0 - 2.0 * np.linspace(0.0, 1.0, 2 * n + 1)[1:],
+                                -1.0 + 2.0 * np.linspace(0.0, 1.0, 2 * n + 1)[1:]])
+    tangential = np.concatenate([[0.0], quarter] + [one_cycle] * cycles) * slip_amplitude
+    history = np.column_stack([np.full(tangential.size, force), tangential])
+    start = 1 + n + (cycles - 1) * 4 * n
+    return FlatOnFlat(bodies=bodies, slave=slave, master=master, loads=loads, motions=motions,
+                      law=law, cof0=0.2, effects=Effects(cof_evolution=True), history=history,
+                      cycle=slice(start, start + 4 * n))
+
+
+@dataclass
+class RunRecord:
+    """Figures of one solver on one case; times in s, memory in MB."""
+
+    solver: str
+    points: int
+    dofs: int
+    setup_time: float
+    increment_times: list
+    iterations: list
+    max_iterations: list
+    cutbacks: int
+    peak_memory_mb: float
+
+    def summary(self, cycle: slice) -> dict:
+        times = np.asarray(self.increment_times[cycle])
+        iterations = np.asarray(self.iterations[cycle])
+        return {
+            "solver": self.solver, "points": self.points, "dofs": self.dofs,
+            "setup_s": round(self.setup_time, 3),
+            "increment_mean_s": float(times.mean()), "increment_max_s": float(times.max()),
+            "cycle_s": float(times.sum()),
+            "newton_mean": float(iterations.mean()),
+            "newton_max": int(np.max(self.max_iterations[cycle])),
+            "cutbacks": self.cutbacks, "peak_memory_mb": round(self.peak_memory_mb, 1),
+        }
+
+
+def drive(solver, state: ContactState, case: FlatOnFlat, *, label: str, points: int, dofs: int,
+          setup_time: float, trace_memory: bool = True):
+    """Run ``case.history`` through ``solver.increment``; returns the record and per-point fields.
+
+    fields: pressure (n,) MPa, shear (n, 2) MPa and COF (n,) at the end of the history.
+    Peak memory is the Python-heap peak (tracemalloc) during the increments.
+    """
+    if trace_memory:
+        tracemalloc.start()
+    equilibrium = solver.initial_equilibrium()
+    times, iterations, max_iterations, cutbacks = [], [], [], 0
+    for amplitudes in case.history:
+        start = time.perf_counter()
+        equilibrium, state, _, stats = solver.increment(equilibrium, state, amplitudes, case.effects)
+        times.append(time.perf_counter() - start)
+        iterations.append(stats.iterations)
+        max_iterations.append(stats.max_iterations)
+        cutbacks += stats.cutbacks
+    peak = tracemalloc.get_traced_memory()[1] / 2**20 if trace_memory else float("nan")
+    if trace_memory:
+        tracemalloc.stop()
+    area = solver.area
+    forces = equilibrium.forces.reshape(-1, 3)
+    fields = {"pressure": forces[:, 0] / area, "shear": forces[:, 1:] / area[:, None], "cof": state.cof}
+    record = RunRecord(label, points, dofs, setup_time, times, iterations, max_iterations, cutbacks, peak)
+    return record, fields
+
+
+def relative_difference(reference: dict, other: dict) -> float:
+    """Largest difference of the per-point fields, relative to each field's largest magnitude."""
+    worst = 0.0
+    for name, value in reference.items():
+        scale = max(float(np.max(np.abs(value))), 1e-300)
+        worst = max(worst, float(np.max(np.abs(other[name] - value))) / scale)
+    return worst
+
+
+def format_table(rows: list[dict]) -> str:
+    """Fixed-width text table of benchmark summaries."""
+    columns = ["solver", "points", "dofs", "setup_s", "increment_mean_s", "increment_max_s", "cycle_s",
+               "newton_mean", "newton_max", "cutbacks", "peak_memory_mb", "rel_diff"]
+    lines = [" ".join(f"{c:>16}" for c in columns)]
+    for row in rows:
+        cells = []
+        for c in columns:
+            value = row.get(c, "")
+            cells.append(f"{value:>16.4g}" if isinstance(value, float) else f"{value!s:>16}")
+        lines.append(" ".join(cells))
+    return "\n".join(lines)
+
+
+def write_json(rows: list[dict], path: Path, meta: dict) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"meta": meta, "rows": rows}, indent=2))
+
+
+__all__ = ["FlatOnFlat", "flat_on_flat", "RunRecord", "drive", "relative_difference", "format_table",
+           "write_json", "asdict"]

@@ -1,0 +1,118 @@
+"""Plots of a results file, written as PNG files (matplotlib, no screen needed).
+
+2D interfaces are drawn as profiles along the contact; 3D interfaces as maps over the two
+in-plane coordinates with the largest extent. Cycle histories show the area fractions and,
+where a clamp force exists, the clamp force versus cycles.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+FIELD_LABELS = {
+    "pressure": "contact pressure p [MPa]",
+    "shear": "shear traction |τ| [MPa]",
+    "cof": "COF μ [-]",
+    "max_utilised_cof": "max utilised COF |τ|/p [-]",
+    "slip_range": "slip range in cycle [mm]",
+    "dissipation_in_cycle": "frictional dissipation in cycle [mJ/mm²]",
+    "wear_depth": "wear depth (both bodies) [mm]",
+}
+
+
+def _field(group, name):
+    value = group[name][()]
+    if name == "shear":
+        value = np.linalg.norm(np.atleast_2d(value.T).T.reshape(value.shape[0], -1), axis=1)
+    if name == "wear_depth":
+        value = value.sum(axis=0)
+    return value
+
+
+def _plane_axes(coordinates: np.ndarray) -> tuple[int, int]:
+    spans = np.ptp(coordinates, axis=0)
+    first, second = np.argsort(spans)[::-1][:2]
+    return int(min(first, second)), int(max(first, second))
+
+
+def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
+    """Draw the standard figures of one results file; returns the PNG paths."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written = []
+    with h5py.File(path, "r") as file:
+        coordinates = file["points/coordinates"][()]
+        final = file["final"]
+        names = [n for n in FIELD_LABELS if n in final]
+        title = file.attrs.get("scene_name", "")
+        if coordinates.shape[1] == 2:
+            order = np.argsort(coordinates[:, 0])
+            x = coordinates[order, 0]
+            fig, axes = plt.subplots(len(names), 1, figsize=(7, 1.9 * len(names)), sharex=True)
+            first = file["cycles/fields"]
+            for ax, name in zip(np.atleast_1d(axes), names):
+                ax.plot(x, _field(final, name)[order], "-", lw=1.4, label="final")
+                if name in ("pressure", "shear") and name in first:
+                    initial = first[name][0]
+                    initial = np.linalg.norm(initial.reshape(initial.shape[0], -1), axis=1) if name == "shear" else initial
+                    ax.plot(x, initial[order], "--", lw=1.0, label="first cycle")
+                    ax.legend(fontsize=7)
+                ax.set_ylabel(FIELD_LABELS[name], fontsize=7)
+                ax.grid(alpha=0.3)
+            np.atleast_1d(axes)[-1].set_xlabel("position along the contact x [mm]")
+            fig.suptitle(f"{title}: interface fields")
+            fig.tight_layout()
+            target = out_dir / "fields.png"
+            fig.savefig(target, dpi=130)
+            plt.close(fig)
+            written.append(target)
+        else:
+            a, b = _plane_axes(coordinates)
+            for name in names:
+                fig, ax = plt.subplots(figsize=(6, 4.5))
+                value = _field(final, name)
+                mappable = ax.tricontourf(coordinates[:, a], coordinates[:, b], value, levels=24, cmap="viridis")
+                fig.colorbar(mappable, ax=ax, label=FIELD_LABELS[name])
+                ax.set_aspect("equal")
+                ax.set_xlabel(f"{'xyz'[a]} [mm]")
+                ax.set_ylabel(f"{'xyz'[b]} [mm]")
+                ax.set_title(f"{title}: {name.replace('_', ' ')}")
+                fig.tight_layout()
+                target = out_dir / f"{name}_map.png"
+                fig.savefig(target, dpi=130)
+                plt.close(fig)
+                written.append(target)
+        cycles = file["cycles"]
+        if "figures" in cycles:
+            figures = cycles["figures"]
+            n = cycles["equivalent_cycles"][()]
+            clamp = figures.get("clamp_force_N")
+            has_clamp = clamp is not None and np.any(np.isfinite(clamp[()]))
+            fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(7, 5 if has_clamp else 3), sharex=True)
+            axes = np.atleast_1d(axes)
+            for key in ("stick_area_fraction", "slip_area_fraction", "damaged_area_fraction",
+                        "worn_area_fraction", "cof_evolved_area_fraction"):
+                if key in figures:
+                    axes[0].plot(n, figures[key][()], label=key.replace("_area_fraction", ""))
+            axes[0].set_ylabel("area / nominal area")
+            axes[0].legend(fontsize=7)
+            axes[0].grid(alpha=0.3)
+            if has_clamp:
+                axes[1].plot(n, clamp[()] / 1000.0, color="k")
+                axes[1].set_ylabel("clamp (bolt) force [kN]")
+                axes[1].grid(alpha=0.3)
+            axes[-1].set_xlabel("equivalent load cycles")
+            fig.suptitle(f"{title}: contact condition over cycles")
+            fig.tight_layout()
+            target = out_dir / "cycles.png"
+            fig.savefig(target, dpi=130)
+            plt.close(fig)
+            written.append(target)
+    return written

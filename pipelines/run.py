@@ -1,0 +1,93 @@
+"""Run a scene end to end: build, condense, solve the procedure, write results and plots."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from tqdm import tqdm
+
+from contact import procedure
+from contact.solver import ContactSolver, ConvergenceError
+from contact.structure import ContactSpace
+from pipelines.build import Model, build
+from pipelines.plots import plot_results
+from pipelines.results import ResultsWriter
+from pipelines.scene import Scene
+
+
+class ProgressBar:
+    """tqdm bar over the load cycles of all phases, with the current slip and stick areas."""
+
+    def __init__(self, total_cycles: int, enabled: bool, label: str):
+        self.bar = tqdm(total=total_cycles, unit="cycle", disable=not enabled, desc=label,
+                        dynamic_ncols=True, leave=True)
+
+    def phase(self, name, n_cycles):
+        self.bar.set_description(f"{name}")
+
+    def increment(self, record):
+        pass
+
+    def cycle(self, summary):
+        figures = summary.figures
+        self.bar.set_postfix(slip=f"{figures['slip_area_fraction']:.2f}",
+                             stick=f"{figures['stick_area_fraction']:.2f}", refresh=False)
+        self.bar.update(1)
+
+    def close(self):
+        self.bar.close()
+
+
+@dataclass
+class Outcome:
+    """What a run produced: the summary for --json, the files, and stage times (s)."""
+
+    summary: dict
+    results_path: Path
+    plots: list
+    stage_times: dict = field(default_factory=dict)
+
+
+def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool = True) -> Outcome:
+    stage_times = {}
+    clock = time.perf_counter()
+    space = ContactSpace(model.assembly.structure)
+    solver = ContactSolver(space, model.law, model.settings)
+    stage_times["contact_space_s"] = time.perf_counter() - clock
+    effects = model.scene.effects
+    proc = model.procedure
+    total = proc.cof_cycles + (proc.wear_cycles if "wear" in effects else 0)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    bar = ProgressBar(total, progress, model.scene.name)
+    writer = ResultsWriter(out_dir / "results.h5", model, space,
+                           record_every=model.scene.section("procedure").get("record_every", 1),
+                           progress=bar)
+    clock = time.perf_counter()
+    try:
+        result = procedure.run(solver, model.initial_state(), model.program, proc,
+                               cof_evolution="cof_evolution" in effects, wear="wear" in effects,
+                               observer=writer)
+    except (ConvergenceError, KeyboardInterrupt):
+        writer.abort()
+        bar.close()
+        raise
+    bar.close()
+    stage_times["procedure_s"] = time.perf_counter() - clock
+    path = writer.finish(result)
+    written = plot_results(path, out_dir / "plots") if plots else []
+    summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
+               **result.figures}
+    return Outcome(summary, path, written, stage_times)
+
+
+def run_scene(scene: Scene, out_dir: str | Path, *, progress: bool = True, plots: bool = True) -> Outcome:
+    """Build the scene's model and run it into ``out_dir``; see :func:`run_model`."""
+    clock = time.perf_counter()
+    model = build(scene)
+    build_time = time.perf_counter() - clock
+    outcome = run_model(model, Path(out_dir), progress=progress, plots=plots)
+    outcome.stage_times = {"build_and_condense_s": build_time, **outcome.stage_times}
+    outcome.summary["wall_time_s"] = sum(outcome.stage_times.values())
+    return outcome
