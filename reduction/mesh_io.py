@@ -1,0 +1,219 @@
+"""Volume meshes in: meshio files (Abaqus .inp, Gmsh .msh, ...) and scikit-fem meshes.
+
+A ``MeshModel`` holds the scikit-fem mesh with its named node sets and element sets.
+Supported solid cells: Tet4, Hex8, Tet10 (3D); Tri3, Quad4 (2D, plane strain). Node sets come
+from Abaqus *NSET, Gmsh physical groups of lower dimension (nodes of those faces/edges) and
+scikit-fem boundaries; element sets from *ELSET, volume physical groups and subdomains.
+Coordinates in mm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import meshio
+import numpy as np
+import skfem
+from skfem.io.meshio import INV_HEX_MAPPING
+
+from reduction.elasticity import ElasticBody
+from reduction.errors import InputError
+from reduction.selection import nodes_at_points
+
+# meshio cell type -> (scikit-fem mesh, dimension)
+_SOLID_CELLS = {
+    "tetra": (skfem.MeshTet1, 3),
+    "hexahedron": (skfem.MeshHex1, 3),
+    "tetra10": (skfem.MeshTet2, 3),
+    "triangle": (skfem.MeshTri1, 2),
+    "quad": (skfem.MeshQuad1, 2),
+}
+_UNSUPPORTED_SOLIDS = {"wedge", "wedge15", "pyramid", "pyramid13", "hexahedron20", "hexahedron27",
+                       "triangle6", "quad8", "quad9"}
+_SURFACE_CELLS = {"triangle", "quad", "triangle6", "quad8", "quad9", "line", "line3", "vertex"}
+
+# right-handed corner triples (corner, edge neighbours) in meshio/VTK/Abaqus node order
+_HEX_CORNERS = np.array([[0, 1, 3, 4], [1, 2, 0, 5], [2, 3, 1, 6], [3, 0, 2, 7],
+                         [4, 7, 5, 0], [5, 4, 6, 1], [6, 5, 7, 2], [7, 6, 4, 3]])
+
+
+@dataclass(frozen=True)
+class MeshModel:
+    """A scikit-fem mesh with named sets.
+
+    points: (n_points, dim) all element nodes, mm (for Tet10 including mid-edge nodes).
+    node_sets: name -> indices into ``points``; element_sets: name -> element indices (mesh.t columns).
+    """
+
+    mesh: skfem.Mesh
+    points: np.ndarray
+    node_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    element_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    source: str = "scikit-fem"
+
+    @property
+    def quadratic(self) -> bool:
+        return isinstance(self.mesh, skfem.MeshTet2)
+
+    def node_set(self, name: str) -> np.ndarray:
+        if name not in self.node_sets:
+            raise InputError(f"{self.source}: no node set '{name}'; available: {sorted(self.node_sets) or 'none'}")
+        if self.node_sets[name].size == 0:
+            raise InputError(f"{self.source}: node set '{name}' has no nodes on the solid elements")
+        return self.node_sets[name]
+
+    def element_set(self, name: str) -> np.ndarray:
+        if name not in self.element_sets:
+            raise InputError(f"{self.source}: no element set '{name}'; available: {sorted(self.element_sets) or 'none'}")
+        return self.element_sets[name]
+
+    def body_nodes(self, body: ElasticBody, name: str) -> np.ndarray:
+        """Rows of ``body.node_dofs`` for the named node set (matched by position)."""
+        return nodes_at_points(body.coordinates, self.points[self.node_set(name)])
+
+    def per_element(self, values_by_set: dict[str, float], quantity: str) -> np.ndarray:
+        """(n_elements,) array from one value per element set; every element must be covered once."""
+        n_elements = self.mesh.t.shape[1]
+        values = np.full(n_elements, np.nan)
+        for name, value in values_by_set.items():
+            elements = self.element_set(name)
+            if np.any(~np.isnan(values[elements]) & (values[elements] != value)):
+                raise InputError(f"{self.source}: element set '{name}' overlaps another set with a different {quantity}")
+            values[elements] = value
+        missing = np.flatnonzero(np.isnan(values))
+        if missing.size:
+            raise InputError(f"{self.source}: {missing.size} elements have no {quantity} "
+                             f"(first element index {missing[0]}); sets given: {sorted(values_by_set)}")
+        return values
+
+
+def from_skfem(mesh: skfem.Mesh) -> MeshModel:
+    """Wrap a scikit-fem mesh: named boundaries become node sets, subdomains element sets."""
+    node_sets = {name: np.unique(mesh.facets[:, np.asarray(facets)].ravel())
+                 for name, facets in (mesh.boundaries or {}).items()}
+    element_sets = {name: np.asarray(elements) for name, elements in (mesh.subdomains or {}).items()}
+    points = mesh.doflocs.T if isinstance(mesh, skfem.MeshTet2) else mesh.p.T
+    return MeshModel(mesh=mesh, points=np.ascontiguousarray(points), node_sets=node_sets,
+                     element_sets=element_sets, source="scikit-fem mesh")
+
+
+def read_mesh(path) -> MeshModel:
+    """Read a volume (or 2D) mesh file with meshio; format from the file extension."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"mesh file {path} does not exist")
+    try:
+        raw = meshio.read(path)
+    except Exception as error:  # meshio raises bare exceptions of many kinds for bad files
+        raise InputError(f"{path}: meshio cannot read it ({error})") from error
+    return from_meshio(raw, source=str(path))
+
+
+def from_meshio(raw: meshio.Mesh, source: str = "meshio mesh") -> MeshModel:
+    """Convert a meshio mesh to a MeshModel, with sets; checks cell types and orientation."""
+    cell_type = _solid_type(raw, source)
+    mesh_type, dim = _SOLID_CELLS[cell_type]
+    cells = raw.cells_dict[cell_type]
+    points = np.asarray(raw.points, dtype=float)[:, :dim]
+    _check_orientation(points, cells, cell_type, source)
+
+    # keep element nodes only: stray points (reference nodes, geometry points) would be unconnected DOFs
+    used = np.unique(cells)
+    compact = np.full(len(raw.points), -1, dtype=np.int64)
+    compact[used] = np.arange(used.size)
+    points = np.ascontiguousarray(points[used])
+    t = compact[cells].T
+    if cell_type == "hexahedron":
+        t = t[INV_HEX_MAPPING[:8]]
+    mesh = mesh_type(points.T, np.ascontiguousarray(t))
+
+    node_sets = {name: _compact(compact, indices) for name, indices in raw.point_sets.items()}
+    element_sets: dict[str, np.ndarray] = {}
+    for name, by_type in raw.cell_sets_dict.items():
+        if name.startswith("gmsh:"):
+            continue
+        if cell_type in by_type:
+            element_sets[name] = np.asarray(by_type[cell_type], dtype=np.int64)
+        surface_nodes = [raw.cells_dict[kind][index].ravel() for kind, index in by_type.items() if kind != cell_type]
+        if surface_nodes:
+            node_sets[name] = _compact(compact, np.concatenate(surface_nodes))
+    _gmsh_physical_groups(raw, cell_type, dim, compact, node_sets, element_sets)
+    return MeshModel(mesh=mesh, points=points, node_sets=node_sets, element_sets=element_sets, source=source)
+
+
+def _compact(compact: np.ndarray, file_indices) -> np.ndarray:
+    indices = compact[np.unique(np.asarray(file_indices, dtype=np.int64))]
+    return indices[indices >= 0]
+
+
+def _solid_type(raw: meshio.Mesh, source: str) -> str:
+    kinds = {block.type for block in raw.cells}
+    unsupported = sorted(kinds & _UNSUPPORTED_SOLIDS - _SURFACE_CELLS)
+    solids3d = sorted(kinds & {"tetra", "hexahedron", "tetra10"})
+    if unsupported:
+        raise InputError(f"{source}: unsupported cell type(s) {', '.join(unsupported)}; "
+                         "supported: tetra (Tet4), hexahedron (Hex8), tetra10 (Tet10), triangle, quad")
+    if len(solids3d) > 1:
+        raise InputError(f"{source}: mixed solid cell types {', '.join(solids3d)} in one body are not supported")
+    if solids3d:
+        return solids3d[0]
+    solids2d = sorted(kinds & {"triangle", "quad"})
+    if len(solids2d) == 1:
+        return solids2d[0]
+    if len(solids2d) > 1:
+        raise InputError(f"{source}: mixed 2D cell types {', '.join(solids2d)} are not supported")
+    raise InputError(f"{source}: no solid cells found (cell types present: {', '.join(sorted(kinds)) or 'none'})")
+
+
+def _signed_measures(points: np.ndarray, cells: np.ndarray, cell_type: str) -> np.ndarray:
+    """Per element, the smallest signed corner volume (3D) or area (2D); positive when well ordered."""
+    if cell_type in ("tetra", "tetra10"):
+        corners = np.array([[0, 1, 2, 3]])
+    elif cell_type == "hexahedron":
+        corners = _HEX_CORNERS
+    elif cell_type == "triangle":
+        corners = np.array([[0, 1, 2]])
+    else:  # quad
+        corners = np.array([[0, 1, 3], [1, 2, 0], [2, 3, 1], [3, 0, 2]])
+    origin = points[cells[:, corners[:, 0]]]
+    edges = np.stack([points[cells[:, corners[:, k]]] - origin for k in range(1, corners.shape[1])], axis=-2)
+    if edges.shape[-1] == 2:
+        return np.min(edges[..., 0, 0] * edges[..., 1, 1] - edges[..., 0, 1] * edges[..., 1, 0], axis=1)
+    return np.min(np.linalg.det(edges), axis=1)
+
+
+def _check_orientation(points: np.ndarray, cells: np.ndarray, cell_type: str, source: str) -> None:
+    measure = _signed_measures(points, cells, cell_type)
+    bad = np.flatnonzero(measure <= 0)
+    if bad.size:
+        raise InputError(
+            f"{source}: {bad.size} of {len(cells)} {cell_type} elements are inverted or degenerate "
+            f"(non-positive corner volume), first element index {bad[0]} with nodes {cells[bad[0]].tolist()}"
+        )
+
+
+def _gmsh_physical_groups(raw, cell_type, dim, compact, node_sets, element_sets) -> None:
+    """Named Gmsh physical groups: solid-dimension groups become element sets, lower ones node sets."""
+    physical = raw.cell_data.get("gmsh:physical")
+    if physical is None or not raw.field_data:
+        return
+    solid_offset = 0
+    for block, tags in zip(raw.cells, physical):
+        block_dim = 3 if block.type in ("tetra", "hexahedron", "tetra10") else \
+            2 if block.type in ("triangle", "quad", "triangle6", "quad8", "quad9") else \
+            1 if block.type in ("line", "line3") else 0
+        for name, (tag, group_dim) in ((n, v[:2]) for n, v in raw.field_data.items()):
+            if group_dim != block_dim:
+                continue
+            hits = np.flatnonzero(np.asarray(tags) == tag)
+            if not hits.size:
+                continue
+            if block.type == cell_type and block_dim == dim:
+                previous = element_sets.get(name, np.zeros(0, dtype=np.int64))
+                element_sets[name] = np.union1d(previous, hits + solid_offset)
+            elif block_dim < dim:
+                previous = node_sets.get(name, np.zeros(0, dtype=np.int64))
+                node_sets[name] = np.union1d(previous, _compact(compact, block.data[hits].ravel()))
+        if block.type == cell_type:
+            solid_offset += len(block.data)
