@@ -120,9 +120,22 @@ class ContactSolver:
         return float(np.sqrt(np.sum((r_kin / self.settings.displacement_tolerance) ** 2)
                              + np.sum((r_ctl / (self.settings.force_tolerance * force_scale)) ** 2)))
 
-    def _newton_step(self, response: Response, r_kin, r_ctl):
-        """Solve J·[Δg, Δq] = −[r_kin, r_ctl] for the current consistent tangent."""
-        return solve_newton_system(self.space, tangent_blocks(response, self.area), r_kin, r_ctl)
+    def _newton_step(self, response: Response, g, state: ContactState, r_kin, r_ctl):
+        """Solve J·[Δg, Δq] = −[r_kin, r_ctl] for the current consistent tangent.
+
+        With no point closed a force-controlled body floats and J is singular. The points
+        nearest to contact then get the normal penalty stiffness in the tangent only, so
+        the step carries the body into contact; the residual stays exact, so the converged
+        answer does too.
+        """
+        blocks = tangent_blocks(response, self.area)
+        searching = not np.any(blocks[:, 0, 0] > 0.0) and self.space.n_control > 0
+        if searching:
+            penetration = self.h0 + g.reshape(self.n_points, self.dim)[:, 0] - state.gap
+            nearest = penetration >= penetration.max() - 1e-9
+            kn = np.broadcast_to(self.law.normal_stiffness, penetration.shape)
+            blocks[nearest, 0, 0] = kn[nearest] * self.area[nearest]
+        return (*solve_newton_system(self.space, blocks, r_kin, r_ctl), searching)
 
     def _solve_to(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
                   stats: IncrementStats) -> tuple[Equilibrium, Response] | None:
@@ -136,20 +149,26 @@ class ContactSolver:
         r_kin, r_ctl, response, forces = self._residual(g, q, state, reference, g_f, f_q)
         merit = self._merit(r_kin, r_ctl, force_scale)
         for iteration in range(1, self.settings.max_iterations + 1):
-            delta_g, delta_q = self._newton_step(response, r_kin, r_ctl)
+            delta_g, delta_q, searching = self._newton_step(response, g, state, r_kin, r_ctl)
             step = 1.0
-            while True:
+            # A contact-search step (no point closed yet) is taken whole: the merit of the
+            # open configuration is no guide to how far the body has to move.
+            while not searching:
                 trial = self._residual(g + step * delta_g, q + step * delta_q, state, reference, g_f, f_q)
                 trial_merit = self._merit(trial[0], trial[1], force_scale)
                 if trial_merit <= (1.0 - 1e-4 * step) * merit or step < 1.0 / 64:
                     break
                 step *= 0.5
+            if searching:
+                trial = self._residual(g + delta_g, q + delta_q, state, reference, g_f, f_q)
+                trial_merit = self._merit(trial[0], trial[1], force_scale)
             g, q = g + step * delta_g, q + step * delta_q
             r_kin, r_ctl, response, forces = trial
             merit = trial_merit
             if not np.all(np.isfinite(g)) or not np.all(np.isfinite(q)):
                 break
-            if self._converged(r_kin, r_ctl, force_scale):
+            floating = self.space.n_control and not np.any(response.dpressure_dh > 0.0) and np.any(f_q)
+            if self._converged(r_kin, r_ctl, force_scale) and not floating:
                 stats.iterations += iteration
                 stats.max_iterations = max(stats.max_iterations, iteration)
                 return Equilibrium(g, q, forces, amplitudes.copy()), response

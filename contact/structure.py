@@ -119,21 +119,16 @@ class ContactSpace:
         self._compliance_Kcp = self._Kcc.solve(self._Kcp)
         self._Kqp = K[np.ix_(q, p)]
         # Each pattern, at unit amplitude, as a contact-space load: g_f and f_q columns.
-        force_c, force_q, motion_p = [], [], []
-        for name in structure.patterns:
-            vector = structure.loads.get(name)
-            if vector is None:
-                motion = structure.motions[name]
-                force_c.append(np.zeros(c.size))
-                force_q.append(np.zeros(q.size))
-                motion_p.append(motion[p])
+        n_patterns = len(structure.patterns)
+        self.pattern_force_c = np.zeros((c.size, n_patterns))
+        self.pattern_force_q = np.zeros((q.size, n_patterns))
+        self.pattern_motion = np.zeros((p.size, n_patterns))
+        for k, name in enumerate(structure.patterns):
+            if name in structure.loads:
+                self.pattern_force_c[:, k] = structure.loads[name][c]
+                self.pattern_force_q[:, k] = structure.loads[name][q]
             else:
-                force_c.append(vector[c])
-                force_q.append(vector[q])
-                motion_p.append(np.zeros(p.size))
-        self.pattern_force_c = np.array(force_c).T.reshape(c.size, -1)
-        self.pattern_force_q = np.array(force_q).T.reshape(q.size, -1)
-        self.pattern_motion = np.array(motion_p).T.reshape(p.size, -1)
+                self.pattern_motion[:, k] = structure.motions[name][p]
         effective_c = self.pattern_force_c - self._Kcp @ self.pattern_motion
         compliance_f = self._Kcc.solve(effective_c)
         self.pattern_gf = Gc @ compliance_f

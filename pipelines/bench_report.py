@@ -25,7 +25,9 @@ from contact.assembly import Body, ReferencePoint
 from contact.law import ContactLaw, ContactState
 from contact.solver import Effects
 from pipelines.meshes import flat_block
-from reduction.elasticity import assemble_elastic_body
+from reduction.elasticity import ElasticBody
+import skfem
+from skfem.models.elasticity import lame_parameters, linear_elasticity
 
 
 @dataclass(frozen=True)
@@ -51,6 +53,19 @@ class FlatOnFlat:
         return ContactState.initial(n_points, 2, self.cof0)
 
 
+def box_body(mesh: skfem.MeshHex, youngs_modulus: float, poisson_ratio: float) -> ElasticBody:
+    """Elastic body of a mesh of rectangular boxes (MPa), 2×2×2 Gauss points per hexahedron.
+
+    The same stiffness as :func:`reduction.elasticity.assemble_elastic_body` (exact for boxes;
+    agrees to round-off) but assembled 10× faster than with its default 4×4×4 rule, which
+    matters at 3,600 contact points (two bodies of 20,000 hexahedra).
+    """
+    basis = skfem.Basis(mesh, skfem.ElementVector(skfem.ElementHex1()), intorder=3)
+    stiffness = linear_elasticity(*lame_parameters(youngs_modulus, poisson_ratio)).assemble(basis).tocsr()
+    return ElasticBody(mesh=mesh, basis=basis, dim=3, stiffness=stiffness, mass=None,
+                       node_dofs=basis.nodal_dofs.T.astype(np.int64))
+
+
 def flat_on_flat(points_per_side: int, *, size: float = 10.0, height: float = 5.0,
                  layers: int = 6, pressure: float = 100.0, slip_amplitude: float = 2.0e-3,
                  increments_per_quarter: int = 5, cycles: int = 1,
@@ -65,8 +80,8 @@ def flat_on_flat(points_per_side: int, *, size: float = 10.0, height: float = 5.
     n_el = points_per_side - 1
     upper = flat_block(size, size, height, n_el, n_el, layers, z0=0.0, z_growth=1.4)
     lower = flat_block(size, size, height, n_el, n_el, layers, z0=-height, z_growth=1.4, top_fine=True)
-    upper_body = assemble_elastic_body(upper, youngs_modulus, poisson_ratio)
-    lower_body = assemble_elastic_body(lower, youngs_modulus, poisson_ratio)
+    upper_body = box_body(upper, youngs_modulus, poisson_ratio)
+    lower_body = box_body(lower, youngs_modulus, poisson_ratio)
     top = np.flatnonzero(np.isclose(upper.p[2], height))
     bottom = np.flatnonzero(np.isclose(lower.p[2], -height))
     bodies = [

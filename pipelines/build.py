@@ -91,14 +91,18 @@ def make_mesh(spec: dict, where: str, base: Path | None):
     return read_mesh(path).mesh
 
 
-def build(scene: Scene) -> Model:
-    """Assemble and condense the scene's bodies and read its law, loads and procedure."""
+def build(scene: Scene, meshes_override: dict | None = None) -> Model:
+    """Assemble and condense the scene's bodies and read its law, loads and procedure.
+
+    meshes_override: body name → scikit-fem mesh used instead of the scene's (e.g. a mesh
+    whose surface was moved by wear).
+    """
     data = scene.data
     dim = scene.dimension
     base = scene.path.parent if scene.path else None
     bodies, built_meshes = [], {}
     for name, spec in data["bodies"].items():
-        mesh = make_mesh(spec["mesh"], f"bodies.{name}.mesh", base)
+        mesh = (meshes_override or {}).get(name) or make_mesh(spec["mesh"], f"bodies.{name}.mesh", base)
         if mesh.dim() != dim:
             raise InputError(f"'bodies.{name}.mesh' is {mesh.dim()}D but the scene is {dim}D")
         built_meshes[name] = mesh

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from contact.checks import finite_difference_tangent, tangent_matrix
 from contact.law import ContactLaw, ContactState, Status, advance, evaluate, wear_increment
 
 LAW = ContactLaw(normal_stiffness=4e6, critical_slip=1e-3, cof_max=0.7, cof_rate=0.05,
@@ -17,33 +18,6 @@ def _state(n, n_tangent, cof=0.4, elastic=None, wear=None):
     if wear is not None:
         state = replace(state, wear_depth=np.asarray(wear, float))
     return state
-
-
-def _fd_tangent(h, ds, state, law, step=1e-9):
-    """Central differences of [p, τ] with respect to [h, Δs]: (n, 1+nt, 1+nt)."""
-    n, nt = ds.shape
-    jac = np.zeros((n, 1 + nt, 1 + nt))
-    for j in range(1 + nt):
-        dh = np.zeros(n)
-        dds = np.zeros((n, nt))
-        if j == 0:
-            dh[:] = step
-        else:
-            dds[:, j - 1] = step
-        plus = evaluate(h + dh, ds + dds, state, law)
-        minus = evaluate(h - dh, ds - dds, state, law)
-        jac[:, 0, j] = (plus.pressure - minus.pressure) / (2 * step)
-        jac[:, 1:, j] = (plus.shear - minus.shear) / (2 * step)
-    return jac
-
-
-def _analytic_tangent(response):
-    n, nt = response.shear.shape
-    jac = np.zeros((n, 1 + nt, 1 + nt))
-    jac[:, 0, 0] = response.dpressure_dh
-    jac[:, 1:, 0] = response.dshear_dh
-    jac[:, 1:, 1:] = response.dshear_ds
-    return jac
 
 
 @pytest.mark.parametrize("n_tangent", [1, 2])
@@ -68,8 +42,8 @@ def test_consistent_tangent_matches_finite_differences(n_tangent, case):
     response = evaluate(h, ds, state, LAW)
     expected = Status.STICK if case == "stick" else Status.SLIP
     assert np.all(response.status == expected)
-    fd = _fd_tangent(h, ds, state, LAW)
-    analytic = _analytic_tangent(response)
+    fd = finite_difference_tangent(h, ds, state, LAW)
+    analytic = tangent_matrix(response)
     scale = np.abs(analytic).max(axis=(1, 2), keepdims=True)
     assert np.max(np.abs(fd - analytic) / scale) < 1e-6
 

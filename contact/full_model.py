@@ -1,0 +1,304 @@
+"""The same contact problem on the full, uncondensed sparse model: the reference for the condensed one.
+
+Every body keeps all its DOFs. Reference points are coupled (RBE2) and held DOFs removed
+exactly as in :func:`contact.assembly.assemble`; the bodies sit in one global numbering of
+their free DOFs (neither fixed nor prescribed), and Newton solves
+
+    K·u + K_p·u_p + Gᵀ·λ(G·u) − f(t) = 0,       λ = A·[p, τ] from :mod:`contact.law`,
+
+with the tangent ``K + Gᵀ·(A·D)·G`` factorised by a sparse LU every iteration (MKL PARDISO
+when installed, else SuperLU). Line search, cutback and the history update follow
+:class:`contact.solver.ContactSolver`; the kinematic tolerance applies to the Newton
+correction of the contact kinematics ``G·Δu`` and the force tolerance to the residual.
+Units: mm, N, MPa.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from contact.assembly import Body
+from contact.interface import Pairing, kinematic_operator, pair_surfaces, surface_from_facets
+from contact.law import ContactLaw, ContactState, Response, advance, evaluate, wear_increment
+from contact.linear import tangent_blocks
+from contact.solver import ConvergenceError, Effects, IncrementStats, NewtonSettings
+from reduction import pardiso
+from reduction.coupling import rigid_couplings
+from reduction.errors import InputError
+
+
+@dataclass(frozen=True)
+class FullModel:
+    """All bodies, uncondensed, on their free DOFs.
+
+    stiffness: K (n_free, n_free) CSR, N/mm.  prescribed_stiffness: K_p (n_free, n_prescribed).
+    contact_operator: G (n_points·dim, n_free), rows per point [normal, tangent(s)].
+    pattern_force: (n_free, n_patterns) N at unit amplitude; pattern_motion: (n_prescribed,
+    n_patterns) mm. Patterns are the loads then the motions, as in :class:`contact.structure.Structure`.
+    body_dofs: body name → (n_body_dofs,) global free index of each original DOF, −1 where
+    fixed or coupled; labels: control DOF name → ("free" | "prescribed", index).
+    """
+
+    stiffness: sp.csr_matrix
+    prescribed_stiffness: sp.csr_matrix
+    contact_operator: sp.csr_matrix
+    area: np.ndarray
+    initial_overclosure: np.ndarray
+    dim: int
+    pattern_force: np.ndarray
+    pattern_motion: np.ndarray
+    patterns: tuple
+    pairing: Pairing
+    labels: dict = field(default_factory=dict)
+
+    @property
+    def n_dofs(self) -> int:
+        return self.stiffness.shape[0]
+
+    @property
+    def n_points(self) -> int:
+        return self.area.size
+
+
+def _component_names(dim: int, rotations: bool) -> list[str]:
+    names = ["ux", "uy", "uz"][:dim]
+    return names + ((["rz"] if dim == 2 else ["rx", "ry", "rz"]) if rotations else [])
+
+
+def build(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, np.ndarray], *,
+          loads: dict | None = None, motions: dict | None = None, search_distance: float = np.inf,
+          initial_gap: np.ndarray | None = None) -> FullModel:
+    """The full model of the inputs that :func:`contact.assembly.assemble` condenses (same arguments)."""
+    by_name = {b.name: b for b in bodies}
+    for role, (name, _) in (("slave", slave), ("master", master)):
+        if name not in by_name:
+            raise InputError(f"{role} surface names body {name!r}, which is not defined "
+                             f"(bodies: {', '.join(by_name)})")
+    if slave[0] == master[0]:
+        raise InputError("slave and master surfaces must belong to different bodies")
+    surfaces = {name: surface_from_facets(by_name[name].elastic.mesh, facets, f"{name} surface")
+                for name, facets in (slave, master)}
+
+    blocks, offsets, kept_maps, fixed_all, labels, offset = [], {}, {}, [], {}, 0
+    for body in bodies:
+        elastic = body.elastic
+        stiffness, kept = elastic.stiffness, np.arange(elastic.n_dofs)
+        names = list(body.reference_points)
+        coupling = None
+        if names:
+            points = [body.reference_points[n] for n in names]
+            rotations = {p.rotations for p in points}
+            if len(rotations) > 1:
+                raise InputError(f"body {body.name}: all reference points of one body must agree on "
+                                 "coupling rotations")
+            coupling = rigid_couplings(elastic.n_dofs, elastic.node_dofs, elastic.coordinates,
+                                       [(np.asarray(p.nodes), p.position) for p in points],
+                                       rotations=rotations.pop())
+            stiffness, kept = coupling.reduce_matrix(stiffness), coupling.kept
+            reference = np.atleast_2d(coupling.reference_dofs)
+            for k, name in enumerate(names):
+                for comp, dof in zip(_component_names(elastic.dim, points[k].rotations), reference[k]):
+                    labels[f"{body.name}.{name}.{comp}"] = offset + int(dof)
+        if body.name in surfaces and np.any(kept[elastic.node_dofs[surfaces[body.name].nodes]] < 0):
+            raise InputError(f"body {body.name}: the contact surface shares nodes with a "
+                             "reference-point coupling; couple a different node set")
+        if len(body.fixed_nodes):
+            fixed = kept[elastic.node_dofs[np.asarray(body.fixed_nodes)][:, list(body.fixed_components)]].ravel()
+            if np.any(fixed < 0):
+                raise InputError(f"body {body.name}: fixed nodes overlap a reference-point coupling")
+            fixed_all.append(offset + fixed)
+        blocks.append(sp.csr_matrix(stiffness))
+        offsets[body.name], kept_maps[body.name] = offset, kept
+        offset += stiffness.shape[0]
+    n_all = offset
+    stiffness_all = sp.block_diag(blocks, format="csr")
+
+    def pattern_vectors(spec, kind):
+        vectors = {}
+        for pattern, entries in (spec or {}).items():
+            vector = np.zeros(n_all)
+            for body_name, ref_name, comp, value in entries:
+                label = f"{body_name}.{ref_name}.{comp}"
+                if label not in labels:
+                    raise InputError(f"{kind} {pattern!r}: no control DOF {label!r} "
+                                     f"(available: {', '.join(labels) or 'none'})")
+                vector[labels[label]] += value
+            vectors[pattern] = vector
+        return vectors
+
+    load_vectors, motion_vectors = pattern_vectors(loads, "load"), pattern_vectors(motions, "motion")
+    prescribed = np.unique(np.concatenate(
+        [np.flatnonzero(v) for v in motion_vectors.values()] or [np.zeros(0, dtype=int)])).astype(int)
+    for pattern, vector in load_vectors.items():
+        if np.any(vector[prescribed]):
+            raise InputError(f"load {pattern!r} acts on a DOF whose motion is prescribed")
+    fixed = np.concatenate(fixed_all) if fixed_all else np.zeros(0, dtype=int)
+    if np.intersect1d(fixed, prescribed).size:
+        raise InputError("a prescribed control DOF is also held fixed")
+    free = np.setdiff1d(np.arange(n_all), np.concatenate([fixed, prescribed]))
+    index = np.full(n_all, -1)
+    index[free] = np.arange(free.size)
+
+    pairing = pair_surfaces(surfaces[slave[0]], surfaces[master[0]], search_distance=search_distance)
+    if initial_gap is not None:
+        gap = np.asarray(initial_gap, dtype=float)
+        if gap.shape != pairing.initial_overclosure.shape:
+            raise InputError(f"initial gap has {gap.size} values for {pairing.n_points} contact points")
+        pairing = Pairing(**{**pairing.__dict__, "initial_overclosure": -gap})
+
+    def surface_dofs(name):
+        elastic = by_name[name].elastic
+        dofs = index[offsets[name] + kept_maps[name][elastic.node_dofs[surfaces[name].nodes]]]
+        if np.any(dofs < 0):
+            raise InputError(f"body {name}: fixed nodes overlap the contact surface")
+        return dofs
+
+    G = kinematic_operator(pairing, surface_dofs(slave[0]), surface_dofs(master[0]), free.size)
+    patterns = tuple(load_vectors) + tuple(motion_vectors)
+    force = np.column_stack([load_vectors[p][free] if p in load_vectors else np.zeros(free.size)
+                             for p in patterns] or [np.zeros(free.size)])[:, :len(patterns)]
+    motion = np.column_stack([motion_vectors[p][prescribed] if p in motion_vectors
+                              else np.zeros(prescribed.size) for p in patterns]
+                             or [np.zeros(prescribed.size)])[:, :len(patterns)]
+    where = {label: ("prescribed", int(np.searchsorted(prescribed, dof))) if dof in prescribed
+             else ("free", int(index[dof])) for label, dof in labels.items() if index[dof] >= 0 or dof in prescribed}
+    return FullModel(stiffness=stiffness_all[free][:, free].tocsr(),
+                     prescribed_stiffness=stiffness_all[free][:, prescribed].tocsr(),
+                     contact_operator=G, area=pairing.area,
+                     initial_overclosure=pairing.initial_overclosure, dim=pairing.normal.shape[1],
+                     pattern_force=force, pattern_motion=motion, patterns=patterns, pairing=pairing,
+                     labels=where)
+
+
+@dataclass(frozen=True)
+class FullEquilibrium:
+    """A converged configuration of the full model.
+
+    displacement: u (n_free,) mm.  kinematics: G·u (n_rows,) mm, relative to h₀ (as the
+    condensed ``Equilibrium.kinematics``).  forces: λ (n_rows,) N.  amplitudes: pattern amplitudes.
+    """
+
+    displacement: np.ndarray
+    kinematics: np.ndarray
+    forces: np.ndarray
+    amplitudes: np.ndarray
+
+
+def sparse_lu_solver():
+    """``solve(A, b)`` by a fresh sparse LU of the unsymmetric A: MKL PARDISO if installed, else SuperLU."""
+    if pardiso.available():
+        from pypardiso import PyPardisoSolver
+
+        return PyPardisoSolver(mtype=11).solve
+    return lambda matrix, rhs: spla.splu(matrix.tocsc()).solve(rhs)
+
+
+class FullModelSolver:
+    """Newton on the full model with the interface of :class:`contact.solver.ContactSolver`."""
+
+    def __init__(self, model: FullModel, law: ContactLaw, settings: NewtonSettings = NewtonSettings()):
+        self.model = model
+        self.law = law
+        self.settings = settings
+        self.dim = model.dim
+        self.n_points = model.n_points
+        self.area = model.area
+        self.h0 = model.initial_overclosure
+        self.G = model.contact_operator.tocsr()
+        self.GT = self.G.T.tocsr()
+        self._solve = sparse_lu_solver()
+
+    def initial_equilibrium(self) -> FullEquilibrium:
+        rows = self.n_points * self.dim
+        return FullEquilibrium(np.zeros(self.model.n_dofs), np.zeros(rows), np.zeros(rows),
+                               np.zeros(len(self.model.patterns)))
+
+    def _response(self, kinematics, reference, state) -> Response:
+        per_point = kinematics.reshape(self.n_points, self.dim)
+        slip = per_point[:, 1:] - reference.reshape(self.n_points, self.dim)[:, 1:]
+        return evaluate(self.h0 + per_point[:, 0], slip, state, self.law)
+
+    def _forces(self, response: Response) -> np.ndarray:
+        traction = np.concatenate([response.pressure[:, None], response.shear], axis=1)
+        return (self.area[:, None] * traction).ravel()
+
+    def _residual(self, u, external, state, reference):
+        kinematics = self.G @ u
+        response = self._response(kinematics, reference, state)
+        forces = self._forces(response)
+        return self.model.stiffness @ u + self.GT @ forces - external, kinematics, response, forces
+
+    def _tangent(self, response: Response) -> sp.csr_matrix:
+        blocks = tangent_blocks(response, self.area)
+        n, dim = self.n_points, self.dim
+        rows = np.repeat(np.arange(n * dim).reshape(n, dim, 1), dim, axis=2)
+        cols = np.repeat(np.arange(n * dim).reshape(n, 1, dim), dim, axis=1)
+        D = sp.csr_matrix((blocks.ravel(), (rows.ravel(), cols.ravel())), shape=(n * dim, n * dim))
+        return (self.model.stiffness + self.GT @ D @ self.G).tocsr()
+
+    def _solve_to(self, start: FullEquilibrium, state: ContactState, amplitudes: np.ndarray,
+                  stats: IncrementStats):
+        model, settings = self.model, self.settings
+        external = model.pattern_force @ amplitudes - model.prescribed_stiffness @ (model.pattern_motion @ amplitudes)
+        force_scale = max(1.0, float(np.max(np.abs(model.pattern_force @ amplitudes), initial=0.0)),
+                          float(np.max(np.abs(start.forces), initial=0.0)))
+        force_tolerance = settings.force_tolerance * force_scale
+        reference = start.kinematics
+        u = start.displacement.copy()
+        residual, kinematics, response, forces = self._residual(u, external, state, reference)
+        merit = float(np.linalg.norm(residual)) / force_tolerance
+        for iteration in range(1, settings.max_iterations + 1):
+            delta = -self._solve(self._tangent(response), residual)
+            step = 1.0
+            while True:
+                trial = self._residual(u + step * delta, external, state, reference)
+                trial_merit = float(np.linalg.norm(trial[0])) / force_tolerance
+                if trial_merit <= (1.0 - 1e-4 * step) * merit or step < 1.0 / 64:
+                    break
+                step *= 0.5
+            u = u + step * delta
+            residual, kinematics, response, forces = trial
+            merit = trial_merit
+            if not np.all(np.isfinite(u)):
+                break
+            # Residual-only test: 1e-10 mm of contact kinematics is kn·A·1e-10 ≈ 1e-5 N here,
+            # the order of the force tolerance, so it also bounds the kinematic error.
+            if np.max(np.abs(residual), initial=0.0) <= force_tolerance:
+                stats.iterations += iteration
+                stats.max_iterations = max(stats.max_iterations, iteration)
+                return FullEquilibrium(u, kinematics, forces, amplitudes.copy()), response
+        stats.iterations += settings.max_iterations
+        return None
+
+    def increment(self, start: FullEquilibrium, state: ContactState, amplitudes: np.ndarray,
+                  effects: Effects) -> tuple[FullEquilibrium, ContactState, np.ndarray, IncrementStats]:
+        """Advance to the load ``amplitudes`` with cutbacks, as :meth:`ContactSolver.increment`."""
+        stats = IncrementStats()
+        targets = [(np.asarray(amplitudes, dtype=float), 0)]
+        equilibrium, status = start, None
+        while targets:
+            target, level = targets[-1]
+            solved = self._solve_to(equilibrium, state, target, stats)
+            too_much_wear = False
+            if solved is not None and effects.wear and np.isfinite(self.settings.wear_cap):
+                wear_now = wear_increment(solved[1], self.law, effects.cycle_jump).sum(axis=0)
+                too_much_wear = float(wear_now.max(initial=0.0)) > self.settings.wear_cap
+            if solved is None or too_much_wear:
+                if level >= self.settings.max_cutbacks:
+                    reason = (f"the wear increment stays above the cap {self.settings.wear_cap:g} mm"
+                              if too_much_wear else "Newton did not converge on the full model")
+                    raise ConvergenceError(f"increment failed after {level} cutbacks: {reason}")
+                stats.cutbacks += 1
+                targets[-1] = (target, level + 1)
+                targets.append((0.5 * (equilibrium.amplitudes + target), level + 1))
+                continue
+            equilibrium, response = solved
+            state, status = advance(state, response, self.law, cof_evolution=effects.cof_evolution,
+                                    wear=effects.wear, cycle_jump=effects.cycle_jump)
+            stats.substeps += 1
+            targets.pop()
+        return equilibrium, state, status, stats
