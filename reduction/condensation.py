@@ -68,7 +68,7 @@ class Condensation:
         return u
 
 
-def _as_index(dofs, n_dofs: int, label: str) -> np.ndarray:
+def as_dof_index(dofs, n_dofs: int, label: str) -> np.ndarray:
     index = np.asarray(dofs, dtype=np.int64).ravel()
     if index.size and (index.min() < 0 or index.max() >= n_dofs):
         raise InputError(f"{label} DOF index out of range 0..{n_dofs - 1}")
@@ -90,8 +90,8 @@ def condense(stiffness, retained, fixed=(), loads=None, *, solver: str = "auto")
     n_dofs = matrix.shape[0]
     if matrix.shape != (n_dofs, n_dofs):
         raise InputError(f"stiffness must be square, got shape {matrix.shape}")
-    retained = _as_index(retained, n_dofs, "retained")
-    fixed = _as_index(fixed, n_dofs, "fixed")
+    retained = as_dof_index(retained, n_dofs, "retained")
+    fixed = as_dof_index(fixed, n_dofs, "fixed")
     if np.intersect1d(retained, fixed).size:
         raise InputError("a DOF is both retained and fixed")
     loads = {} if loads is None else dict(loads)
@@ -114,7 +114,7 @@ def condense(stiffness, retained, fixed=(), loads=None, *, solver: str = "auto")
         schur = matrix[retained][:, retained].toarray()
     else:
         k_ii = matrix[interior][:, interior]
-        solve = _lazy_factor(k_ii, solver)
+        solve = lazy_interior_solver(k_ii, solver)
         if solver == "pardiso":
             kept = np.concatenate([retained, interior])
             schur = pardiso.schur_complement(
@@ -139,8 +139,12 @@ def condense(stiffness, retained, fixed=(), loads=None, *, solver: str = "auto")
     )
 
 
-def _lazy_factor(k_ii: sp.csr_matrix, solver: str) -> Callable[[np.ndarray], np.ndarray]:
-    """K_ii^-1 b, factorising on first use: a PARDISO Schur complement alone does not need it."""
+def lazy_interior_solver(k_ii: sp.csr_matrix, solver: str, *, eager: bool | None = None
+                         ) -> Callable[[np.ndarray], np.ndarray]:
+    """K_ii^-1 b, factorising on first use: a PARDISO Schur complement alone does not need it.
+
+    eager (default: unless PARDISO) factorises at once, so a singular K_ii is reported at once.
+    """
     factors = []
 
     def solve(rhs: np.ndarray) -> np.ndarray:
@@ -148,7 +152,9 @@ def _lazy_factor(k_ii: sp.csr_matrix, solver: str) -> Callable[[np.ndarray], np.
             factors.append(factorize(k_ii, solver=solver, label="interior stiffness K_ii"))
         return factors[0].solve(rhs)
 
-    if solver != "pardiso":
+    if eager is None:
+        eager = solver != "pardiso"
+    if eager:
         solve(np.zeros(k_ii.shape[0]))  # factorise now so a singular K_ii is reported at once
     return solve
 

@@ -30,7 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from reduction.condensation import _as_index
+from reduction.condensation import as_dof_index
 from reduction.errors import InputError
 from reduction.factorization import factorize
 
@@ -133,8 +133,8 @@ def craig_bampton(stiffness, mass, interface_dofs, n_modes: int, *, fixed=(), so
     n = k.shape[0]
     if k.shape != (n, n) or m.shape != (n, n):
         raise InputError(f"stiffness {k.shape} and mass {m.shape} must be square and of equal size")
-    interface = _as_index(interface_dofs, n, "interface")
-    fixed = _as_index(fixed, n, "fixed")
+    interface = as_dof_index(interface_dofs, n, "interface")
+    fixed = as_dof_index(fixed, n, "fixed")
     if np.intersect1d(interface, fixed).size:
         raise InputError("a DOF is both an interface DOF and fixed")
     if n_modes < 0:
