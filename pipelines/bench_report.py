@@ -16,7 +16,7 @@ from __future__ import annotations
 import json
 import time
 import tracemalloc
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -24,10 +24,11 @@ import numpy as np
 from contact.assembly import Body, ReferencePoint
 from contact.law import ContactLaw, ContactState
 from contact.solver import Effects
-from pipelines.meshes import flat_block
-from reduction.elasticity import ElasticBody
 import skfem
 from skfem.models.elasticity import lame_parameters, linear_elasticity
+
+from pipelines.meshes import flat_block
+from reduction.elasticity import ElasticBody
 
 
 @dataclass(frozen=True)
@@ -189,6 +190,3 @@ def write_json(rows: list[dict], path: Path, meta: dict) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps({"meta": meta, "rows": rows}, indent=2))
 
-
-__all__ = ["FlatOnFlat", "flat_on_flat", "RunRecord", "drive", "relative_difference", "format_table",
-           "write_json", "asdict"]
