@@ -195,13 +195,39 @@ def validate(data: dict, source: str = "scene") -> list[str]:
                 _check_table(table, schema, f"{parent}.{name}", problems)
         elif section in data:
             _check_table(data[section], schema, section, problems)
-    if problems:
-        return problems
-    scene = data["scene"]
-    dim = scene["dimension"]
-    for effect in scene["effects"]:
+    for check in (_check_effects, _check_bodies, _check_contact):
+        try:
+            check(data, problems)
+        except (KeyError, TypeError, AttributeError, ValueError):
+            pass  # a malformed table was already reported by the schema check above
+    names = set()
+    for kind in ("loads", "motions"):
+        entries = data.get(kind, [])
+        if not isinstance(entries, list):
+            problems.append(f"'{kind}' must be an array of tables ([[{kind}]])")
+            continue
+        for k, entry in enumerate(entries):
+            _check_table(entry, PATTERN_KEYS, f"{kind}[{k}]", problems)
+            if isinstance(entry, dict) and entry.get("name") in names:
+                problems.append(f"'{kind}[{k}].name' '{entry['name']}' is used twice")
+            if isinstance(entry, dict):
+                names.add(entry.get("name"))
+                dof = entry.get("dof", "")
+                if isinstance(dof, str) and dof.count(".") != 2:
+                    problems.append(f"'{kind}[{k}].dof' must read 'body.point.component', got {dof!r}")
+    if not names:
+        problems.append("the scene has no [[loads]] or [[motions]]")
+    return problems
+
+
+def _check_effects(data, problems):
+    for effect in data["scene"]["effects"]:
         if effect not in KNOWN_EFFECTS:
             problems.append(f"unknown effect '{effect}' in 'scene.effects'{_suggest(str(effect), KNOWN_EFFECTS)}")
+
+
+def _check_bodies(data, problems):
+    dim = data["scene"]["dimension"]
     materials, bodies = data["materials"], data["bodies"]
     for name, body in bodies.items():
         if body["material"] not in materials:
@@ -239,6 +265,10 @@ def validate(data: dict, source: str = "scene") -> list[str]:
             position = ref.get("position")
             if not (isinstance(position, list) and len(position) == dim):
                 problems.append(f"'{where}.position' must be {dim} coordinates in mm")
+
+
+def _check_contact(data, problems):
+    scene, bodies, dim = data["scene"], data["bodies"], data["scene"]["dimension"]
     contact = data["contact"]
     for role in ("slave", "master"):
         selection = contact[role]
@@ -254,24 +284,6 @@ def validate(data: dict, source: str = "scene") -> list[str]:
         problems.append("effect 'wear' is listed but 'contact.wear_coefficients' are zero or missing")
     if "cof_evolution" in scene["effects"] and not contact.get("cof_rate"):
         problems.append("effect 'cof_evolution' is listed but 'contact.cof_rate' is zero or missing")
-    names = set()
-    for kind in ("loads", "motions"):
-        entries = data.get(kind, [])
-        if not isinstance(entries, list):
-            problems.append(f"'{kind}' must be an array of tables ([[{kind}]])")
-            continue
-        for k, entry in enumerate(entries):
-            _check_table(entry, PATTERN_KEYS, f"{kind}[{k}]", problems)
-            if isinstance(entry, dict) and entry.get("name") in names:
-                problems.append(f"'{kind}[{k}].name' '{entry['name']}' is used twice")
-            if isinstance(entry, dict):
-                names.add(entry.get("name"))
-                dof = entry.get("dof", "")
-                if isinstance(dof, str) and dof.count(".") != 2:
-                    problems.append(f"'{kind}[{k}].dof' must read 'body.point.component', got {dof!r}")
-    if not names:
-        problems.append("the scene has no [[loads]] or [[motions]]")
-    return problems
 
 
 def parse(text: str, source: str = "scene", path: Path | None = None) -> Scene:

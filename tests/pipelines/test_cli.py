@@ -1,0 +1,43 @@
+"""The command line as a user meets it: JSON figures, exit status 2 on bad input, no partial files."""
+
+import json
+
+import h5py
+import numpy as np
+
+from pipelines.cli import main
+
+FIGURES = {"verdict", "stick_area_fraction", "slip_area_fraction", "damaged_area_fraction",
+           "worn_area_fraction", "max_wear_depth_mm", "wear_volume_mm3", "dissipated_energy_mJ",
+           "min_stick_margin", "cycles_run", "wall_time_s"}
+
+
+def test_run_prints_json_figures_and_writes_results(coarse_cylinder, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["run", str(coarse_cylinder), "--out", str(out), "--json", "--quiet"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert FIGURES <= set(summary)
+    assert summary["verdict"] == "damage"  # gross slip at constant μ = μ_max: fretting scar
+    assert summary["cycles_run"] == 2 and summary["max_wear_depth_mm"] > 0
+    with h5py.File(out / "results.h5") as file:
+        assert file.attrs["complete"] and file.attrs["format_version"] == 1
+        wear = file["final/wear_depth"][()]
+        area = file["points/area"][()]
+        assert np.isclose(np.sum(wear.sum(axis=0) * area), summary["wear_volume_mm3"])
+        assert file["final/pressure"].attrs["units"] == "MPa"
+    assert (out / "plots" / "fields.png").stat().st_size > 10_000
+
+
+def test_bad_scene_exits_2_with_message_and_writes_nothing(coarse_cylinder, tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(coarse_cylinder.read_text().replace("critical_slip", "critcal_slip"))
+    out = tmp_path / "never"
+    assert main(["run", str(bad), "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert "critcal_slip" in error and "Traceback" not in error
+    assert not out.exists()
+
+
+def test_missing_scene_file_exits_2(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "nope.toml"), "--out", str(tmp_path / "o")]) == 2
+    assert "does not exist" in capsys.readouterr().err
