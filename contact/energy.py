@@ -21,7 +21,10 @@ from contact.structure import ContactSpace
 
 @dataclass
 class EnergyMeter:
-    """Accumulates external work and wear release; evaluates stored energy on demand."""
+    """Accumulates external work and wear release; evaluates stored energy on demand.
+
+    Work is counted from the unloaded configuration, the solver's initial equilibrium.
+    """
 
     space: ContactSpace
     law: ContactLaw
@@ -46,8 +49,11 @@ class EnergyMeter:
         displacement = self.space.displacements(equilibrium.control, equilibrium.forces,
                                                 equilibrium.amplitudes)
         forces = self.space.external_forces(displacement, equilibrium.forces, equilibrium.amplitudes)
-        if self._displacement is not None:
-            self.external_work += 0.5 * float((forces + self._forces) @ (displacement - self._displacement))
+        if self._displacement is None:
+            # The first increment starts from the unloaded configuration (u = 0, no forces),
+            # where the solver's initial equilibrium is: its work counts like any other.
+            self._displacement, self._forces = np.zeros_like(displacement), np.zeros_like(forces)
+        self.external_work += 0.5 * float((forces + self._forces) @ (displacement - self._displacement))
         gap = np.asarray(state.gap, dtype=float)
         if self._gap is not None and gap.ndim:
             pressure = equilibrium.forces.reshape(self.space.structure.n_points, -1)[:, 0]
