@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from contact.bolts import BoltSet, bolt_vector, pretension_pattern
 from contact.interface import Pairing, Surface, kinematic_operator, pair_surfaces, surface_from_facets
 from contact.structure import Structure
 from reduction.condensation import Condensation, condense
@@ -132,13 +133,15 @@ def _condense_body(body: Body, surface: Surface | None, offset: int) -> Condense
 def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, np.ndarray], *,
              loads: dict | None = None, motions: dict | None = None,
              search_distance: float = np.inf,
-             initial_gap: np.ndarray | None = None) -> Assembly:
+             initial_gap: np.ndarray | None = None, bolts: tuple = ()) -> Assembly:
     """Condense the bodies and pair ``slave`` = (body name, facet indices) with ``master``.
 
     loads / motions: pattern name → list of (body, reference point, component, value);
     components are "ux", "uy", "uz", "rz", ...; values in N (N·mm for moments) or mm (rad).
     A DOF driven by a motion pattern is prescribed. initial_gap (n_slave_points,) mm, when
     given, replaces the geometric gap (e.g. an analytic profile on flat meshes).
+    bolts: :class:`contact.bolts.Bolt` items; each adds a pretension load pattern
+    "bolt.<name>" that ramps in the preload and is locked afterwards.
     """
     by_name = {b.name: b for b in bodies}
     for role, (name, _) in (("slave", slave), ("master", master)):
@@ -193,6 +196,13 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
         return vectors
 
     load_vectors = pattern_vectors(loads, "load")
+    bolt_set = None
+    if bolts:
+        vectors = np.array([bolt_vector(bolt, labels, n) for bolt in bolts])
+        names = tuple(f"bolt.{bolt.name}" for bolt in bolts)
+        for name, bolt, vector in zip(names, bolts, vectors):
+            load_vectors[name] = pretension_pattern(bolt, vector)
+        bolt_set = BoltSet(tuple(bolts), vectors, names)
     motion_vectors = pattern_vectors(motions, "motion")
     prescribed = np.unique(np.concatenate(
         [np.flatnonzero(v) for v in motion_vectors.values()] or [np.zeros(0, dtype=int)])).astype(int)
@@ -202,7 +212,7 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     structure = Structure(stiffness=stiffness, contact_operator=G, area=pairing.area,
                           initial_overclosure=pairing.initial_overclosure, dim=dim,
                           prescribed=prescribed, loads=load_vectors, motions=motion_vectors,
-                          labels=labels)
+                          labels=labels, bolts=bolt_set)
     return Assembly(structure, condensed, pairing, slave[0], master[0])
 
 

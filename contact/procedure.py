@@ -16,7 +16,7 @@ and draws progress bars. Units: mm, N, MPa, mJ.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -33,10 +33,12 @@ class LoadProgram:
 
     shapes: pattern name → "ramp" (0→1 in the preload, then held), "cyclic" (0 in the
     preload, then sin 2πt per cycle) or "constant" (1 throughout).
+    held: pattern → amplitude replacing 1 after the preload (locked bolt pretensions).
     """
 
     patterns: tuple[str, ...]
     shapes: dict
+    held: dict = field(default_factory=dict)
 
     def preload(self, fraction: float) -> np.ndarray:
         return np.array([fraction if self.shapes[p] == "ramp" else
@@ -44,8 +46,8 @@ class LoadProgram:
 
     def cycle(self, phase: float) -> np.ndarray:
         """Amplitudes at the fraction ``phase`` ∈ [0, 1] of a load cycle."""
-        return np.array([np.sin(2 * np.pi * phase) if self.shapes[p] == "cyclic" else 1.0
-                         for p in self.patterns])
+        return np.array([np.sin(2 * np.pi * phase) if self.shapes[p] == "cyclic" else
+                         self.held.get(p, 1.0) for p in self.patterns])
 
 
 @dataclass(frozen=True)
@@ -96,6 +98,7 @@ class IncrementRecord:
     max_iterations: int
     cutbacks: int
     substeps: int
+    bolt_forces: np.ndarray | None = None
 
 
 @dataclass
@@ -178,10 +181,11 @@ def _loosening(history: list[CycleSummary], procedure: Procedure) -> bool:
 
 def run(solver: ContactSolver, state: ContactState, program: LoadProgram, procedure: Procedure, *,
         cof_evolution: bool, wear: bool, observer: Observer | None = None,
-        clamp_force=None, start: Equilibrium | None = None) -> RunResult:
-    """Run the procedure; ``clamp_force(equilibrium) -> N`` reports a bolt/clamp force if any.
+        start: Equilibrium | None = None) -> RunResult:
+    """Run the procedure. Effects not asked for (``cof_evolution``, ``wear``) are never computed.
 
-    Effects not asked for (``cof_evolution``, ``wear``) are never computed.
+    Bolts of the structure carry their pretension in the preload and are locked at their
+    length before the first cycle; the clamp force is the sum of the bolt forces.
     """
     observer = observer or Observer()
     law = solver.law
@@ -190,11 +194,17 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
     equilibrium = start or solver.initial_equilibrium()
     clock = time.perf_counter()
 
+    bolts = solver.space.structure.bolts
+
+    def bolt_forces(eq):
+        return None if bolts is None else bolts.forces(solver.space, eq)
+
     def step(amplitudes, effects, phase, cycle, t):
         nonlocal equilibrium, state
         equilibrium, state, status, stats = solver.increment(equilibrium, state, amplitudes, effects)
         observer.increment(IncrementRecord(phase, cycle, t, equilibrium, state, status, stats.iterations,
-                                           stats.max_iterations, stats.cutbacks, stats.substeps))
+                                           stats.max_iterations, stats.cutbacks, stats.substeps,
+                                           bolt_forces(equilibrium)))
         return status
 
     observer.phase("preload", 0)
@@ -204,6 +214,12 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
                       k / procedure.preload_increments)
     closed = equilibrium.forces.reshape(solver.n_points, -1)[:, 0] > 0.0
     nominal_area = float(area[closed].sum())
+    if bolts is not None:
+        bolts, space, amplitudes = bolts.lock(solver.space, equilibrium)
+        solver = ContactSolver(space, law, solver.settings)
+        equilibrium = replace(equilibrium, amplitudes=amplitudes)
+        program = replace(program, held={p: amplitudes[program.patterns.index(p)] for p in bolts.patterns})
+    initial_clamp = None if bolts is None else float(bolt_forces(equilibrium).sum())
 
     history: list[CycleSummary] = []
     cycle_number = 0
@@ -245,7 +261,7 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
                 max_utilised_cof=max_util, status=cycle_status,
                 slip_range=np.linalg.norm(high - low, axis=1),
                 dissipation_in_cycle=state.dissipation - start_dissipation, state=state,
-                clamp_force=None if clamp_force is None else float(clamp_force(equilibrium)))
+                clamp_force=None if bolts is None else float(bolt_forces(equilibrium).sum()))
             summary.figures = cycle_figures(area, nominal_area, cycle_status, max_util, state,
                                             cof_initial, law.cof_max, procedure.area_tolerance)
             summary.figures["clamp_force_N"] = summary.clamp_force
@@ -267,6 +283,11 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
     figures["equivalent_cycles"] = equivalent
     figures["nominal_contact_area"] = nominal_area
     figures["wall_time_s"] = time.perf_counter() - clock
+    if bolts is not None:
+        final_clamp = history[-1].clamp_force
+        figures["bolt_force_initial_N"] = initial_clamp
+        figures["bolt_force_final_N"] = final_clamp
+        figures["clamp_force_loss_fraction"] = (initial_clamp - final_clamp) / initial_clamp
     verdict = _verdict(history, procedure, stationary)
     return RunResult(verdict, stationary, figures, state, equilibrium, history)
 

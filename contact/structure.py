@@ -18,6 +18,7 @@ Units: mm, N, N/mm.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -51,6 +52,7 @@ class Structure:
     loads: dict = field(default_factory=dict)
     motions: dict = field(default_factory=dict)
     labels: dict = field(default_factory=dict)
+    bolts: object = None  # contact.bolts.BoltSet, or None without bolts
 
     @property
     def n_dofs(self) -> int:
@@ -116,6 +118,7 @@ class ContactSpace:
         compliance_Kcq = self._Kcc.solve(self._Kcq)
         self.E = Gc @ compliance_Kcq
         self.Sq = K[np.ix_(q, q)] - self._Kcq.T @ compliance_Kcq
+        self.control_stiffness = np.zeros((q.size, q.size))  # locked bolts add to it
         self._compliance_Kcp = self._Kcc.solve(self._Kcp)
         self._Kqp = K[np.ix_(q, p)]
         # Each pattern, at unit amplitude, as a contact-space load: g_f and f_q columns.
@@ -134,6 +137,14 @@ class ContactSpace:
         self.pattern_gf = Gc @ compliance_f
         self.pattern_fq = (self.pattern_force_q - self._Kqp @ self.pattern_motion
                            - self._Kcq.T @ compliance_f)
+
+    def with_control_stiffness(self, extra: np.ndarray) -> "ContactSpace":
+        """The same space with ``extra`` (n_control, n_control) N/mm added to the control
+        block (locked bolts): contact compliance and load images are unchanged."""
+        locked = copy.copy(self)
+        locked.Sq = self.Sq + extra
+        locked.control_stiffness = self.control_stiffness + extra
+        return locked
 
     @property
     def n_rows(self) -> int:
@@ -168,5 +179,6 @@ class ContactSpace:
             if name in s.loads:
                 applied += amplitudes[k] * s.loads[name]
         internal = s.stiffness @ displacement + s.contact_operator.T @ forces
+        internal[self.control_dofs] += self.control_stiffness @ displacement[self.control_dofs]
         applied[self.prescribed] = internal[self.prescribed]
         return applied

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from contact.bolts import Bolt
 from contact.assembly import Assembly, Body, ReferencePoint, assemble
 from contact.law import ContactLaw, ContactState
 from contact.procedure import LoadProgram, Procedure
@@ -131,9 +132,13 @@ def build(scene: Scene, meshes_override: dict | None = None) -> Model:
             out[entry["name"]] = [(body, point, comp, float(entry["value"]))]
         return out
 
+    bolts = tuple(Bolt(name, spec["head"], spec["nut"], np.asarray(spec["axis"], float),
+                       float(spec["stiffness"]), float(spec["pretension"]))
+                  for name, spec in data.get("bolts", {}).items()) if "bolts" in scene.effects else ()
     assembly = assemble(bodies, slave, master, loads=patterns("loads"), motions=patterns("motions"),
-                        search_distance=contact.get("search_distance", np.inf))
+                        search_distance=contact.get("search_distance", np.inf), bolts=bolts)
     shapes = {e["name"]: e["history"] for kind in ("loads", "motions") for e in data.get(kind, [])}
+    shapes.update({f"bolt.{bolt.name}": "ramp" for bolt in bolts})
     program = LoadProgram(assembly.structure.patterns, shapes)
     law = ContactLaw(
         normal_stiffness=contact["normal_stiffness"],

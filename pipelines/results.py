@@ -8,7 +8,8 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
                            initial_overclosure (n,) mm
     /increments/           one row per converged increment: time (cycles), cycle, phase
                            (0 preload, 1 cof, 2 wear), iterations, cutbacks,
-                           external_work, stored_energy, dissipation (mJ),
+                           external_work, stored_energy, dissipation (mJ), bolt_forces
+                           (rows, n_bolts) N with the bolt names in its ``bolts`` attribute,
                            control/<dof>/displacement (mm) and control/<dof>/force (N)
     /cycles/               one row per recorded cycle: cycle, phase, equivalent_cycles and one
                            dataset per global figure (figures/<name>); fields/<name> (rows, n[, k])
@@ -104,6 +105,9 @@ class ResultsWriter(Observer):
             for label, dof in self.labels.items():
                 _append(group, f"control/{label}/displacement", displacement[dof], "mm")
                 _append(group, f"control/{label}/force", forces[dof], "N")
+        if record.bolt_forces is not None:
+            _append(group, "bolt_forces", record.bolt_forces, "N")
+            group["bolt_forces"].attrs["bolts"] = ",".join(self.model.assembly.structure.bolts.names)
         if self.progress is not None:
             self.progress.increment(record)
 

@@ -64,6 +64,13 @@ SCHEMA = {
         "fixed": (dict, False, None, "{ nodes = selection, components = [...] }"),
         "reference_points": (dict, False, None, "named control points"),
     },
+    "bolts.*": {
+        "head": (str, True, None, "head control point 'body.point'"),
+        "nut": (str, True, None, "nut control point 'body.point'"),
+        "axis": (list, True, None, "unit vector from head to nut"),
+        "stiffness": (NUMBER, True, _positive, "axial stiffness k_b = E·A_s/L, N/mm"),
+        "pretension": (NUMBER, True, _positive, "pretension F, N"),
+    },
     "contact": {
         "slave": (dict, True, None, "{ body = ..., box/plane selection of facets }"),
         "master": (dict, True, None, "{ body = ..., box/plane selection of facets }"),
@@ -99,7 +106,8 @@ PATTERN_KEYS = {
     "history": (str, True, lambda v: None if v in ("ramp", "cyclic", "constant") else
                 "must be 'ramp', 'cyclic' or 'constant'", "time shape"),
 }
-TOP_LEVEL = ("scene", "materials", "bodies", "contact", "loads", "motions", "procedure")
+TOP_LEVEL = ("scene", "materials", "bodies", "bolts", "contact", "loads", "motions", "procedure")
+OPTIONAL_TABLES = ("bolts",)
 
 
 @dataclass(frozen=True)
@@ -188,6 +196,8 @@ def validate(data: dict, source: str = "scene") -> list[str]:
         if section.endswith(".*"):
             parent = section[:-2]
             entries = data.get(parent, {})
+            if parent in OPTIONAL_TABLES and parent not in data:
+                continue
             if not isinstance(entries, dict) or not entries:
                 problems.append(f"'[{parent}]' must define at least one named entry")
                 continue
@@ -195,7 +205,7 @@ def validate(data: dict, source: str = "scene") -> list[str]:
                 _check_table(table, schema, f"{parent}.{name}", problems)
         elif section in data:
             _check_table(data[section], schema, section, problems)
-    for check in (_check_effects, _check_bodies, _check_contact):
+    for check in (_check_effects, _check_bodies, _check_contact, _check_bolts):
         try:
             check(data, problems)
         except (KeyError, TypeError, AttributeError, ValueError):
@@ -284,6 +294,23 @@ def _check_contact(data, problems):
         problems.append("effect 'wear' is listed but 'contact.wear_coefficients' are zero or missing")
     if "cof_evolution" in scene["effects"] and not contact.get("cof_rate"):
         problems.append("effect 'cof_evolution' is listed but 'contact.cof_rate' is zero or missing")
+
+
+def _check_bolts(data, problems):
+    bolts, effects = data.get("bolts", {}), data["scene"]["effects"]
+    if bolts and "bolts" not in effects:
+        problems.append("[bolts] are defined but 'bolts' is not in 'scene.effects'")
+    if "bolts" in effects and not bolts:
+        problems.append("effect 'bolts' is listed but no [bolts.NAME] table defines a bolt")
+    dim = data["scene"]["dimension"]
+    for name, bolt in bolts.items():
+        axis = bolt["axis"]
+        if len(axis) != dim or not any(axis):
+            problems.append(f"'bolts.{name}.axis' must be a nonzero vector of {dim} numbers")
+        for end in ("head", "nut"):
+            body, _, point = bolt[end].partition(".")
+            if point not in data["bodies"].get(body, {}).get("reference_points", {}):
+                problems.append(f"'bolts.{name}.{end}' names '{bolt[end]}', which is not a reference point")
 
 
 def parse(text: str, source: str = "scene", path: Path | None = None) -> Scene:
