@@ -77,6 +77,20 @@ class IncrementStats:
     substeps: int = 0
 
 
+def _rigid_modes(space: ContactSpace) -> np.ndarray:
+    """Orthonormal rigid-body motions of the free control DOFs, (n_control, k).
+
+    These are the directions in which a body is held by the contact alone (S_q singular,
+    e.g. a cylinder under force control). Other control DOFs (surface nodes outside the
+    pairing, supported bodies) have an equilibrium of their own when every point is open.
+    """
+    if space.n_control == 0:
+        return np.zeros((0, 0))
+    values, vectors = np.linalg.eigh(space.Sq)
+    scale = float(np.abs(np.diag(space.structure.stiffness)).max())
+    return vectors[:, values <= 1e-8 * scale]
+
+
 class ContactSolver:
     """Owns the Newton iteration for one :class:`ContactSpace` and one :class:`ContactLaw`."""
 
@@ -89,6 +103,7 @@ class ContactSolver:
         self.n_points = structure.n_points
         self.area = structure.area
         self.h0 = structure.initial_overclosure
+        self.rigid_modes = _rigid_modes(space)
 
     def initial_equilibrium(self) -> Equilibrium:
         n_patterns = len(self.space.structure.patterns)
@@ -129,7 +144,7 @@ class ContactSolver:
         answer does too.
         """
         blocks = tangent_blocks(response, self.area)
-        searching = not np.any(blocks[:, 0, 0] > 0.0) and self.space.n_control > 0
+        searching = not np.any(blocks[:, 0, 0] > 0.0) and self.rigid_modes.shape[1] > 0
         if searching:
             penetration = self.h0 + g.reshape(self.n_points, self.dim)[:, 0] - state.gap
             nearest = penetration >= penetration.max() - 1e-9
@@ -167,7 +182,8 @@ class ContactSolver:
             merit = trial_merit
             if not np.all(np.isfinite(g)) or not np.all(np.isfinite(q)):
                 break
-            floating = self.space.n_control and not np.any(response.dpressure_dh > 0.0) and np.any(f_q)
+            floating = (not np.any(response.dpressure_dh > 0.0)
+                        and np.any(np.abs(self.rigid_modes.T @ f_q) > 1e-12 * force_scale))
             if self._converged(r_kin, r_ctl, force_scale) and not floating:
                 stats.iterations += iteration
                 stats.max_iterations = max(stats.max_iterations, iteration)
