@@ -14,7 +14,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from contact.law import ContactLaw, ContactState, Response, advance, evaluate, wear_increment
+from contact.law import (ContactLaw, ContactState, Response, Status, advance, evaluate,
+                         wear_increment)
 from contact.linear import solve_newton_system, tangent_blocks
 from contact.structure import ContactSpace
 
@@ -104,6 +105,12 @@ class ContactSolver:
         self.area = structure.area
         self.h0 = structure.initial_overclosure
         self.rigid_modes = _rigid_modes(space)
+        self._last_failure = None  # (response, r_ctl, force scale) of the last failed attempt
+        # S_q without the round-off stiffness (~1e-8 N/mm) of the rigid modes: left in, it
+        # would let a body loaded beyond the friction limit find a spurious equilibrium
+        # kilometres away instead of reporting the loss of tangential equilibrium.
+        self.control_stiffness = space.Sq - self.rigid_modes @ (self.rigid_modes.T @ space.Sq
+                                                                @ self.rigid_modes) @ self.rigid_modes.T
 
     def initial_equilibrium(self) -> Equilibrium:
         n_patterns = len(self.space.structure.patterns)
@@ -124,7 +131,7 @@ class ContactSolver:
         response = evaluate(*self._split(g, reference), state, self.law)
         forces = self._forces(response)
         r_kin = g - g_f + self.space.E @ q + self.space.W @ forces
-        r_ctl = self.space.Sq @ q - self.space.E.T @ forces - f_q
+        r_ctl = self.control_stiffness @ q - self.space.E.T @ forces - f_q
         return r_kin, r_ctl, response, forces
 
     def _converged(self, r_kin, r_ctl, force_scale) -> bool:
@@ -189,7 +196,25 @@ class ContactSolver:
                 stats.max_iterations = max(stats.max_iterations, iteration)
                 return Equilibrium(g, q, forces, amplitudes.copy()), response
         stats.iterations += self.settings.max_iterations
+        self._last_failure = (response, r_ctl, force_scale)
         return None
+
+    def _failure_reason(self) -> str:
+        """Why the last attempt failed, in words: lost tangential equilibrium or plain divergence."""
+        generic = ("Newton did not converge (the step may be too large for the contact status "
+                   "changes; try more increments)")
+        response, r_ctl, force_scale = self._last_failure
+        closed = response.status != Status.OPEN
+        if not self.rigid_modes.size or not np.any(closed) or np.any(response.status[closed] == Status.STICK):
+            return generic
+        if np.linalg.norm(self.rigid_modes.T @ r_ctl) <= self.settings.force_tolerance * force_scale:
+            return generic
+        capacity = float(np.sum(np.linalg.norm(response.shear, axis=1) * self.area))
+        return (f"tangential equilibrium is lost: all {int(closed.sum())} closed contact points slide "
+                f"at |τ| = μ·p (friction capacity {capacity:.6g} N) and the force-controlled DOFs "
+                "cannot be balanced; the applied load exceeds what friction can carry, so no "
+                "static solution exists (prescribe a motion instead of a force to drive the "
+                "interface into gross slip)")
 
     def increment(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
                   effects: Effects) -> tuple[Equilibrium, ContactState, np.ndarray, IncrementStats]:
@@ -212,9 +237,11 @@ class ContactSolver:
                 if level >= self.settings.max_cutbacks:
                     reason = ("the wear increment stays above the cap "
                               f"{self.settings.wear_cap:g} mm" if too_much_wear else
-                              "Newton did not converge (tangential equilibrium may be lost: "
-                              "the load exceeds what friction can carry, or the step is too large)")
-                    raise ConvergenceError(f"increment failed after {level} cutbacks: {reason}")
+                              self._failure_reason())
+                    raise ConvergenceError(
+                        f"increment to amplitudes {np.round(amplitudes, 6).tolist()} failed after "
+                        f"{level} cutbacks, the last converged amplitudes being "
+                        f"{np.round(equilibrium.amplitudes, 6).tolist()}: {reason}")
                 stats.cutbacks += 1
                 targets[-1] = (target, level + 1)
                 targets.append((0.5 * (equilibrium.amplitudes + target), level + 1))
