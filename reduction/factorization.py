@@ -38,6 +38,11 @@ def cholmod_available() -> bool:
     return True
 
 
+def solver_available(name: str) -> bool:
+    """Whether the named solver ("pardiso", "cholmod", "splu") is installed."""
+    return {"pardiso": pardiso.available, "cholmod": cholmod_available, "splu": lambda: True}[name]()
+
+
 def resolve_solver(solver: str) -> str:
     """Name of the solver to use for "auto" (warns once when PARDISO is missing), else checks the name."""
     if solver not in ("auto", *SOLVERS):

@@ -25,7 +25,8 @@ def _plate(n_side):
 @pytest.mark.bench
 def test_condensing_50k_dofs_onto_4800_face_dofs_takes_at_most_10_s():
     body, retained, clamped = _plate(40)
-    assert resolve_solver("auto") == "pardiso", "install pypardiso for the fast Schur complement"
+    if resolve_solver("auto") != "pardiso":
+        pytest.skip("the 10 s target needs MKL PARDISO (pip install pypardiso)")
     start = time.perf_counter()
     condensed = condense(body.stiffness, retained, fixed=clamped)
     elapsed = time.perf_counter() - start
