@@ -21,6 +21,7 @@ from reduction.coupling import rigid_couplings
 from reduction.craig_bampton import CraigBampton, craig_bampton
 from reduction.elasticity import assemble_elastic_body
 from reduction.errors import InputError
+from reduction.factorization import factorize
 from reduction.mesh_io import read_mesh
 
 #: eigenvalues below this fraction of the largest computed one are rigid-body modes
@@ -89,11 +90,14 @@ class AccuracyReport:
         return records
 
 
-def _lowest_eigenpairs(stiffness, mass, count: int):
+def _lowest_eigenpairs(stiffness, mass, count: int, solver: str):
     """Lowest ``count`` eigenpairs of a sparse pencil that may be singular (rigid modes)."""
     diagonal_ratio = stiffness.diagonal() / np.maximum(mass.diagonal(), np.finfo(float).tiny)
     shift = -1e-6 * float(np.median(diagonal_ratio))
-    values, vectors = spla.eigsh(stiffness.tocsc(), k=count, M=mass.tocsc(), sigma=shift, which="LM")
+    shifted = factorize(stiffness - shift * mass, solver=solver, label="shifted full-model stiffness")
+    inverse = spla.LinearOperator(stiffness.shape, matvec=shifted.solve, dtype=float)
+    values, vectors = spla.eigsh(stiffness.tocsc(), k=count, M=mass.tocsc(), sigma=shift, which="LM",
+                                 OPinv=inverse, v0=np.cos(np.arange(stiffness.shape[0])))
     order = np.argsort(values)
     return values[order], vectors[:, order]
 
@@ -128,14 +132,14 @@ def accuracy_report(stiffness, mass, interface_dofs, n_modes: int, *, fixed=(), 
     free = np.setdiff1d(np.arange(k.shape[0]), fixed)
     k_free, m_free = k[free][:, free], m[free][:, free]
     n_rigid_max = 6 if fixed.size == 0 else 0
-    values, vectors = _lowest_eigenpairs(k_free, m_free, n_frequencies + n_rigid_max)
+    values, vectors = _lowest_eigenpairs(k_free, m_free, n_frequencies + n_rigid_max, solver)
     rigid = int(np.sum(values < _RIGID_TOLERANCE * values.max()))
     full_values, full_vectors = values[rigid:rigid + n_frequencies], vectors[:, rigid:rigid + n_frequencies]
     interior_fixed_count = min(n_frequencies, n_modes)
     held = np.setdiff1d(free, interface)
-    fixed_values = (_lowest_eigenpairs(k[held][:, held], m[held][:, held], interior_fixed_count)[0]
+    fixed_values = (_lowest_eigenpairs(k[held][:, held], m[held][:, held], interior_fixed_count, solver)[0]
                     if interior_fixed_count else np.zeros(0))
-    static_dofs, full_static = _full_statics(k_free, free, interface, fixed.size > 0)
+    static_dofs, full_static = _full_statics(k_free, free, interface, fixed.size > 0, solver)
     full_time = time.perf_counter() - start
 
     reduced_hz, mac = [], []
@@ -170,7 +174,7 @@ def accuracy_report(stiffness, mass, interface_dofs, n_modes: int, *, fixed=(), 
     )
 
 
-def _full_statics(k_free, free, interface, clamped: bool):
+def _full_statics(k_free, free, interface, clamped: bool, solver: str):
     """Full-model interface displacements for a unit load at each (sampled) interface DOF."""
     if not clamped:
         return np.zeros(0, dtype=np.int64), np.zeros((interface.size, 0))
@@ -178,7 +182,7 @@ def _full_statics(k_free, free, interface, clamped: bool):
     position = np.searchsorted(free, interface)
     loads = np.zeros((free.size, chosen.size))
     loads[position[chosen], np.arange(chosen.size)] = 1.0
-    displacement = spla.splu(k_free.tocsc()).solve(loads)
+    displacement = factorize(k_free, solver=solver, label="clamped full-model stiffness").solve(loads)
     return interface[chosen], displacement[position]
 
 
@@ -193,18 +197,21 @@ def _reduced_statics_error(cb: CraigBampton, static_dofs, full_static) -> np.nda
 
 
 def accuracy_report_for_mesh(path, youngs_modulus: float, poisson_ratio: float, density: float,
-                             interface_sets: list[str], n_modes: int, *, clamp_sets=(), rotations: bool = True,
-                             n_frequencies: int = 6) -> AccuracyReport:
+                             n_modes: int, interface_sets: list[str] | None = None, *, clamp_sets=(),
+                             rotations: bool = True, n_frequencies: int = 6) -> AccuracyReport:
     """Report for a mesh file: each named node set is RBE2-coupled to its centroid and becomes an
-    interface; named clamp sets are fixed. E in MPa, density in t/mm^3."""
+    interface (default: every node set in the file that is not a clamp set); named clamp sets
+    are fixed. E in MPa, density in t/mm^3."""
     model = read_mesh(path)
     body = assemble_elastic_body(model.mesh, youngs_modulus, poisson_ratio, density)
+    if interface_sets is None:
+        interface_sets = sorted(set(model.node_sets) - set(clamp_sets))
     groups = []
     for name in interface_sets:
         nodes = model.body_nodes(body, name)
         groups.append((nodes, body.coordinates[nodes].mean(axis=0)))
     if not groups:
-        raise InputError("name at least one interface node set")
+        raise InputError(f"{path}: no interface node set (the file names none besides the clamps)")
     coupling = rigid_couplings(body.n_dofs, body.node_dofs, body.coordinates, groups, rotations=rotations)
     clamped = [body.node_dofs[model.body_nodes(body, name)].ravel() for name in clamp_sets]
     fixed = coupling.kept[np.concatenate(clamped)] if clamped else np.zeros(0, dtype=np.int64)
