@@ -91,7 +91,7 @@ def _node_dofs(basis: skfem.Basis, dim: int) -> np.ndarray:
     return np.concatenate(blocks, axis=1).T.astype(np.int64)
 
 
-#: elements per block in the simplex fast path; bounds the dense local-matrix work array (~100 MB)
+#: elements per block in the simplex fast path; bounds the dense work arrays to a few hundred MB
 _SIMPLEX_BLOCK = 60_000
 
 
@@ -114,13 +114,15 @@ def _simplex_matrices(mesh: skfem.Mesh, node_dofs: np.ndarray, lam: np.ndarray, 
         elements = mesh.t[:, block].T
         corners = mesh.p.T[elements]
         edges = np.swapaxes(corners[:, 1:] - corners[:, :1], 1, 2)
+        # rows of the inverse edge matrix are the gradients of barycentric coordinates 1..d
         inverse = np.linalg.inv(edges)
         gradients = np.concatenate([-inverse.sum(axis=1, keepdims=True), inverse], axis=1)
         measure = np.abs(np.linalg.det(edges)) / math.factorial(dim)
-        dot = np.einsum("eak,ebk->eab", gradients, gradients)
-        local = (lam[block, 0, None, None, None, None] * np.einsum("eai,ebj->eaibj", gradients, gradients)
-                 + mu[block, 0, None, None, None, None]
-                 * (np.einsum("eab,ij->eaibj", dot, identity) + np.einsum("eaj,ebi->eaibj", gradients, gradients)))
+        # K_(a i)(b j) = V [lam g_ai g_bj + mu (delta_ij g_a.g_b + g_aj g_bi)]
+        volumetric = np.einsum("eai,ebj->eaibj", gradients, gradients)
+        shear = np.einsum("eab,ij->eaibj", np.einsum("eak,ebk->eab", gradients, gradients), identity) \
+            + np.einsum("eaj,ebi->eaibj", gradients, gradients)
+        local = lam[block, 0, None, None, None, None] * volumetric + mu[block, 0, None, None, None, None] * shear
         local *= measure[:, None, None, None, None]
         dofs = node_dofs[elements].reshape(len(elements), -1)
         rows = np.repeat(dofs, dofs.shape[1], axis=1).ravel()
@@ -131,6 +133,23 @@ def _simplex_matrices(mesh: skfem.Mesh, node_dofs: np.ndarray, lam: np.ndarray, 
                 * np.einsum("ab,ij->aibj", node_mass, identity)[None]
             mass = mass + sp.csr_matrix((local_mass.ravel(), (rows, cols)), shape=(size, size))
     return stiffness, mass
+
+
+def _vector_form_stiffness(basis: skfem.Basis, lam: np.ndarray, mu: np.ndarray) -> sp.csr_matrix:
+    """Isotropic elasticity on any vector basis: the strain of each local basis function is
+    computed once and all local pairs are formed by one einsum (scikit-fem's generic form
+    evaluates both strains for every pair, ~30x slower for hexahedra)."""
+    n_local = basis.Nbfun
+    strains = np.array([sym_grad(basis.basis[i][0]) for i in range(n_local)])  # (b, d, d, e, q)
+    dim = strains.shape[1]
+    trace_ = np.einsum("biieq->beq", strains)
+    stress = (2.0 * mu[None, None, None, :, None] * strains
+              + lam[None, None, None, :, None] * trace_[:, None, None] * np.eye(dim)[None, :, :, None, None])
+    local = np.einsum("aijeq,bijeq,eq->eab", strains, stress, basis.dx, optimize=True)
+    dofs = basis.element_dofs  # (b, e)
+    rows = np.broadcast_to(dofs.T[:, :, None], local.shape).ravel()
+    cols = np.broadcast_to(dofs.T[:, None, :], local.shape).ravel()
+    return sp.csr_matrix((local.ravel(), (rows, cols)), shape=(basis.N, basis.N))
 
 
 def assemble_elastic_body(
@@ -176,7 +195,7 @@ def assemble_elastic_body(
     if type(mesh) in (skfem.MeshTri1, skfem.MeshTet1) and not quadratic:
         stiffness, mass = _simplex_matrices(mesh, node_dofs, lam, mu, rho)
     else:
-        stiffness = elastic_energy.assemble(basis, lam=lam, mu=mu).tocsr()
+        stiffness = _vector_form_stiffness(basis, np.asarray(lam, float), np.asarray(mu, float))
 
         @skfem.BilinearForm
         def kinetic_energy(u, v, w):
