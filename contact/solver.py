@@ -145,18 +145,23 @@ class ContactSolver:
     def _newton_step(self, response: Response, g, state: ContactState, r_kin, r_ctl):
         """Solve J·[Δg, Δq] = −[r_kin, r_ctl] for the current consistent tangent.
 
-        With no point closed a force-controlled body floats and J is singular. The points
-        nearest to contact then get the normal penalty stiffness in the tangent only, so
-        the step carries the body into contact; the residual stays exact, so the converged
-        answer does too.
+        With no point pressed (p > 0) a force-controlled body floats and J is singular: an
+        open interface has no stiffness, and points that just touch (flat blocks placed
+        face to face) have the normal one but no tangential one. The points
+        nearest to contact then get the penalty stiffness, normal and tangential, in the
+        tangent only, so the step carries the body into contact without sliding it (a
+        tangentially free body would otherwise be moved arbitrarily far along its singular
+        rigid modes and land with every point sliding); the residual stays exact, so the
+        converged answer does too.
         """
         blocks = tangent_blocks(response, self.area)
-        searching = not np.any(blocks[:, 0, 0] > 0.0) and self.rigid_modes.shape[1] > 0
+        searching = not np.any(response.pressure > 0.0) and self.rigid_modes.shape[1] > 0
         if searching:
             penetration = self.h0 + g.reshape(self.n_points, self.dim)[:, 0] - state.gap
             nearest = penetration >= penetration.max() - 1e-9
             kn = np.broadcast_to(self.law.normal_stiffness, penetration.shape)
-            blocks[nearest, 0, 0] = kn[nearest] * self.area[nearest]
+            penalty = kn[nearest] * self.area[nearest]
+            blocks[nearest] = penalty[:, None, None] * np.eye(self.dim)
         return (*solve_newton_system(self.space, blocks, r_kin, r_ctl), searching)
 
     def _solve_to(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
