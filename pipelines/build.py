@@ -50,8 +50,15 @@ def select_points(coordinates: np.ndarray, selection: dict, where: str) -> np.nd
     if "box" in selection:
         low, high = (np.asarray(c, dtype=float) for c in selection["box"])
         return np.all((coordinates >= low) & (coordinates <= high), axis=1)
-    axis = AXES[selection["axis"]]
     span = float(np.ptp(coordinates)) or 1.0
+    if "ring" in selection:
+        ring = selection["ring"]
+        axis = AXES[ring["axis"]]
+        offset = coordinates - np.asarray(ring["center"], dtype=float)
+        radial = np.linalg.norm(np.delete(offset, axis, axis=1), axis=1)
+        on_plane = np.abs(offset[:, axis]) <= ring.get("tolerance", 1e-6 * span)
+        return on_plane & (radial >= ring["inner_radius"] - 1e-9) & (radial <= ring["outer_radius"] + 1e-9)
+    axis = AXES[selection["axis"]]
     tolerance = selection.get("tolerance", 1e-6 * span)
     return np.abs(coordinates[:, axis] - selection["value"]) <= tolerance
 

@@ -78,3 +78,106 @@ def flat_block(size_x: float, size_y: float, height: float, n_x: int, n_y: int, 
     if top_fine:
         z = height - z[::-1]
     return skfem.MeshHex.init_tensor(x, y, z0 + z)
+
+
+def _plan_with_hole(length: float, width: float, hole_x: float, hole_radius: float, size: float,
+                    fine_from: float, fine_to: float, coarse_size: float, block_half: float):
+    """2D quads of the rectangle [0, length] × [−width/2, width/2] with a round hole.
+
+    An O-grid fills the square block of half-size ``block_half`` around the hole; a tensor
+    grid (uniform ``size`` on [fine_from, fine_to], growing to ``coarse_size``) fills the rest.
+    Returns node coordinates (n, 2) and CCW quads (m, 4).
+    """
+    half_cells = width / (2.0 * size)
+    block_cells = block_half / size
+    if abs(half_cells - round(half_cells)) > 1e-9 or abs(block_cells - round(block_cells)) > 1e-9:
+        raise InputError("beam mesh: half the width and the hole block half-size must be multiples "
+                         "of the contact element size")
+    if not hole_radius < block_half <= width / 2:
+        raise InputError("beam mesh: the hole must fit inside its block, and the block inside the width")
+    n_fine = int(round((fine_to - fine_from) / size))
+    fine = hole_x + size * np.arange(int(round((fine_from - hole_x) / size)),
+                                     int(round((fine_from - hole_x) / size)) + n_fine + 1)
+
+    def grow(start, end, step):
+        points, x, h = [], start, step
+        while abs(end - x) > 1e-9:
+            h = min(h * 1.3, coarse_size)
+            x = x + np.sign(end - x) * min(h, abs(end - x))
+            if abs(end - x) < 0.5 * h:
+                x = end
+            points.append(x)
+        return points
+
+    xs = np.unique(np.round(np.concatenate([grow(fine[0], 0.0, size)[::-1], fine,
+                                            grow(fine[-1], length, size)]), 9))
+    ys = np.linspace(-width / 2, width / 2, 2 * int(round(half_cells)) + 1)
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    nodes = [np.column_stack([gx.ravel(), gy.ravel()])]
+    index = np.arange(gx.size).reshape(gx.shape)
+    cx = 0.5 * (xs[:-1, None] + xs[1:, None]) + 0 * ys[None, :-1]
+    cy = 0.5 * (ys[None, :-1] + ys[None, 1:]) + 0 * xs[:-1, None]
+    keep = ~((np.abs(cx - hole_x) < block_half) & (np.abs(cy) < block_half))
+    quads = [np.stack([index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]], axis=-1)[keep]]
+
+    n_side = int(round(2 * block_cells))
+    edge = np.linspace(-block_half, block_half, n_side + 1)[:-1]
+    square = np.concatenate([np.column_stack([edge, -block_half + 0 * edge]),
+                             np.column_stack([block_half + 0 * edge, edge]),
+                             np.column_stack([-edge, block_half + 0 * edge]),
+                             np.column_stack([-block_half + 0 * edge, -edge])])
+    angle = np.arctan2(square[:, 1], square[:, 0])
+    circle = hole_radius * np.column_stack([np.cos(angle), np.sin(angle)])
+    n_rings = max(2, int(np.ceil((block_half - hole_radius) / size)))
+    rho = np.linspace(0.0, 1.0, n_rings + 1)
+    ring_nodes = circle[None] + rho[:, None, None] * (square - circle)[None]  # (rings, perimeter, 2)
+    offset = gx.size
+    nodes.append(ring_nodes.reshape(-1, 2) + np.array([hole_x, 0.0]))
+    n_perimeter = square.shape[0]
+    k = np.arange(n_perimeter)
+    ring_index = offset + np.arange(ring_nodes.shape[0] * n_perimeter).reshape(ring_nodes.shape[:2])
+    for layer in range(n_rings):
+        inner, outer = ring_index[layer], ring_index[layer + 1]
+        quads.append(np.stack([inner[k], outer[k], outer[(k + 1) % n_perimeter],
+                               inner[(k + 1) % n_perimeter]], axis=-1))
+    points = np.concatenate(nodes)
+    unique, inverse = np.unique(np.round(points, 9), axis=0, return_inverse=True)
+    cells = inverse.ravel()[np.concatenate(quads)]
+    used, renumbered = np.unique(cells, return_inverse=True)  # drop grid nodes inside the hole block
+    return unique[used], renumbered.reshape(cells.shape)
+
+
+def beam_with_hole(length: float, width: float, thickness: float, hole_x: float, hole_radius: float,
+                   contact_size: float, pad_half_length: float, side: str, gap: float = 0.5,
+                   coarse_size: float = 4.0, layers: int = 6, block_half: float | None = None) -> skfem.MeshHex:
+    """3D hexahedral beam [0, length] × [−width/2, width/2] with a vertical bolt hole at x = hole_x.
+
+    side = "lower": the beam occupies z ∈ [−thickness, 0]; "upper": z ∈ [0, thickness]. The face at
+    z = 0 touches the other beam only on the pad |x − hole_x| ≤ pad_half_length; elsewhere it is
+    recessed by ``gap`` (mm), so the bolted pad is the contact interface.
+    """
+    if side not in ("lower", "upper"):
+        raise InputError("beam side must be 'lower' or 'upper'")
+    block_half = block_half or contact_size * np.ceil((hole_radius + 2.5 * contact_size) / contact_size)
+    plan, quads = _plan_with_hole(length, width, hole_x, hole_radius, contact_size,
+                                  hole_x - pad_half_length - 2 * contact_size,
+                                  hole_x + pad_half_length + 2 * contact_size, coarse_size, block_half)
+    depth = np.linspace(0.0, 1.0, layers + 1)  # 0 at the contact face, 1 at the outer face
+    n_plan = plan.shape[0]
+    x = np.tile(plan[:, 0], layers + 1)
+    y = np.tile(plan[:, 1], layers + 1)
+    s = np.repeat(depth, n_plan)
+    outside = np.clip((np.abs(x - hole_x) - pad_half_length) / contact_size, 0.0, 1.0)
+    face = outside * gap
+    z = face + s * (thickness - face)
+    if side == "lower":
+        z = -z
+    a, b, c, d = quads.T
+    hexes = []
+    for layer in range(layers):
+        lo, hi = layer * n_plan, (layer + 1) * n_plan
+        hexes.append(np.stack([a + lo, d + lo, b + lo, a + hi, c + lo, d + hi, b + hi, c + hi]))
+    t = np.concatenate(hexes, axis=1)
+    if side == "lower":
+        t = t[[3, 5, 6, 0, 7, 1, 2, 4]]  # mirror in z: swap the two layers to keep volumes positive
+    return skfem.MeshHex(np.vstack([x, y, z]), t)

@@ -21,6 +21,8 @@ MESH_GENERATORS = {
     "cylinder_block": ("radius", "half_width", "height", "contact_half_width", "contact_size"),
     "plane_block": ("half_width", "depth", "contact_half_width", "contact_size"),
     "flat_block": ("size_x", "size_y", "height", "n_x", "n_y", "n_z"),
+    "beam_with_hole": ("length", "width", "thickness", "hole_x", "hole_radius", "contact_size",
+                       "pad_half_length"),
 }
 
 
@@ -167,8 +169,17 @@ def _check_table(table, schema, where, problems):
 def _check_selection(selection, where, dim, problems):
     keys = set(selection) - {"body"}
     if not keys:
-        problems.append(f"'{where}' needs a selection: box = [[min...], [max...]] or plane = {{ axis, value }}")
+        problems.append(f"'{where}' needs a selection: box = [[min...], [max...]], axis = ... with "
+                        "value = ..., or ring = {{ center, axis, inner_radius, outer_radius }}")
     for key in keys:
+        if key == "ring":
+            ring = selection["ring"]
+            if not (isinstance(ring, dict) and isinstance(ring.get("center"), list) and len(ring["center"]) == dim
+                    and ring.get("axis") in ("x", "y", "z")[:dim]
+                    and isinstance(ring.get("inner_radius"), NUMBER) and isinstance(ring.get("outer_radius"), NUMBER)
+                    and 0 <= ring["inner_radius"] < ring["outer_radius"]):
+                problems.append(f"'{where}.ring' needs center ({dim} mm), axis, 0 <= inner_radius < outer_radius (mm)")
+            continue
         if key == "box":
             box = selection["box"]
             if not (isinstance(box, list) and len(box) == 2 and all(
