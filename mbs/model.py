@@ -32,6 +32,13 @@ from mbs.counterweight import ReducedCounterweight, reduce_counterweight
 from mbs.parameters import CrankThrowParams, ModelParams
 
 #: CW local frame -> crank frame: CW y (radial outward) = -x crank, CW x = y crank, z = z.
+class SimulationError(RuntimeError):
+    """The time integration of a run failed (Newton did not converge)."""
+
+
+#: Energy is evaluated on at most this many samples: the CW kinetic energy needs the full FE mass.
+ENERGY_SAMPLES = 1001
+
 COUNTERWEIGHT_ROTATION = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
@@ -65,6 +72,7 @@ class RunHistories:
     cw_angular_velocity: np.ndarray
     cw_angular_acceleration: np.ndarray
     cw_wing_tip_axial: np.ndarray
+    energy_time: np.ndarray | None
     energy: np.ndarray | None
     wall_time: float
 
@@ -281,17 +289,8 @@ def _counterweight_energy(reduced: ReducedCounterweight, rotation, velocity, ome
     return kinetic + strain
 
 
-def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None,
-             initial_modal_coordinates: np.ndarray | None = None, energy: bool = False) -> RunHistories:
-    """Run the model at params.speed_rpm for params.solver.revolutions, fixed time step.
-
-    reduced: a precomputed reduced CW (reuse it across a sweep); built from params if None.
-    initial_modal_coordinates: (n_modes,) initial CW modal coordinates (both CWs), e.g. to
-    release the torsion mode for a free-decay frequency check. energy: also record the total
-    mechanical energy (meaningful with drive="free", damping off and no excitation).
-    """
-    params.validate()
-    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
+def _build(params: ModelParams, reduced: ReducedCounterweight, *, loads: bool,
+           initial_modal_coordinates: np.ndarray | None = None):
     speed = params.shaft_speed
     system = exu.SystemContainer()
     mbs = system.AddSystem()
@@ -303,12 +302,45 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None
     if initial_modal_coordinates is not None:
         for node in items.cw_modal_nodes:
             mbs.SetNodeParameter(node, "initialCoordinates", list(np.asarray(initial_modal_coordinates, dtype=float)))
-    _add_loads(mbs, params, speed, items)
+    if loads:
+        _add_loads(mbs, params, speed, items)
+    return system, mbs, items
+
+
+def system_eigenfrequencies(params: ModelParams, reduced: ReducedCounterweight | None = None,
+                            max_frequency: float = 2000.0) -> np.ndarray:
+    """Eigenfrequencies (Hz, ascending, up to max_frequency) of the assembled multibody model.
+
+    Undamped, constraints projected out (exudyn ComputeODE2Eigenvalues), linearised at the
+    initial state of a run at params.speed_rpm; gyroscopic coupling is not included. These are
+    the coupled crank-throw + counterweight modes a run resonates at.
+    """
+    params.validate()
+    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
+    system, mbs, _ = _build(params, reduced, loads=False)
+    mbs.Assemble()
+    frequencies, _ = mbs.ComputeODE2Eigenvalues(convert2Frequencies=True, ignoreAlgebraicEquations=False)
+    frequencies = np.sort(np.asarray(frequencies))
+    return frequencies[(frequencies > 1e-3) & (frequencies <= max_frequency)]
+
+
+def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None,
+             initial_modal_coordinates: np.ndarray | None = None, energy: bool = False) -> RunHistories:
+    """Run the model at params.speed_rpm for params.solver.revolutions, fixed time step.
+
+    reduced: a precomputed reduced CW (reuse it across a sweep); built from params if None.
+    initial_modal_coordinates: (n_modes,) initial CW modal coordinates (both CWs), e.g. to
+    release the torsion mode for a free-decay frequency check. energy: also record the total
+    mechanical energy (meaningful with drive="free", damping off and no excitation).
+    """
+    params.validate()
+    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
+    system, mbs, items = _build(params, reduced, loads=True, initial_modal_coordinates=initial_modal_coordinates)
     sensors = _add_sensors(mbs, items, energy)
     mbs.Assemble()
 
     solver = params.solver
-    end_time = solver.revolutions * 2.0 * np.pi / speed
+    end_time = solver.revolutions * 2.0 * np.pi / params.shaft_speed
     n_steps = int(round(end_time / solver.time_step))
     settings = exu.SimulationSettings()
     settings.timeIntegration.numberOfSteps = n_steps
@@ -320,8 +352,11 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None
     settings.solutionSettings.sensorsWritePeriod = solver.time_step
     settings.displayStatistics = False
     started = wallclock.perf_counter()
-    mbs.SolveDynamic(settings)
+    converged = mbs.SolveDynamic(settings)
     wall_time = wallclock.perf_counter() - started
+    if not converged:
+        raise SimulationError(f"time integration did not converge at {params.speed_rpm} rpm "
+                              f"(time step {solver.time_step} s)")
     return _collect(mbs, sensors, reduced, energy, wall_time)
 
 
@@ -338,12 +373,14 @@ def _collect(mbs, sensors, reduced: ReducedCounterweight, energy: bool, wall_tim
     rotation = data["rotation"].reshape(2, -1, 3, 3)
     to_local = lambda vectors: np.einsum("csji,csj->csi", rotation, vectors)  # noqa: E731 (A^T v per sample)
     tip_shapes = reduced.wing_tip_axial_shapes()
-    total_energy = None
+    energy_time = total_energy = None
     if energy:
-        total_energy = sum(_stored(mbs, s)[:, 1] for s in sensors["kinetic"] + sensors["potential"])
+        picked = np.unique(np.linspace(0, len(time) - 1, ENERGY_SAMPLES).astype(int))
+        energy_time = time[picked]
+        total_energy = sum(_stored(mbs, s)[picked, 1] for s in sensors["kinetic"] + sensors["potential"])
         for c in range(2):
             total_energy = total_energy + _counterweight_energy(
-                reduced, data["rotation"][c], data["velocity"][c], data["omega"][c], data["q"][c], data["q_t"][c])
+                reduced, *(data[key][c][picked] for key in ("rotation", "velocity", "omega", "q", "q_t")))
     return RunHistories(
         time=time,
         crank_angle=_stored(mbs, sensors["angle"])[:, 6],
@@ -359,6 +396,7 @@ def _collect(mbs, sensors, reduced: ReducedCounterweight, energy: bool, wall_tim
         cw_angular_velocity=data["omega"],
         cw_angular_acceleration=to_local(data["alpha"]),
         cw_wing_tip_axial=np.einsum("tm,csm->cst", tip_shapes, data["q"]),
+        energy_time=energy_time,
         energy=total_energy,
         wall_time=wall_time,
     )

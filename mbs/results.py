@@ -1,0 +1,144 @@
+"""Write multibody results to the shared HDF5 layout (``/histories``) and read them back.
+
+Layout (see the team contract): root attrs fretwork_format="fretwork-results", format_version=1;
+``/histories/time`` and one dataset per signal with attrs units, description and, for (n, k)
+signals, components. Counterweights are cw1 (journal-1 side) and cw2 (journal-2 side); vectors
+are in the CW frame (x tangential, y radial outward, z along the crank axis).
+``/model`` holds what is needed to rebuild acceleration fields on the CW mesh (node coordinates,
+mode shapes, interface and wing-tip nodes); ``/spectra`` and ``/campbell`` hold the analyses.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from mbs.campbell import Campbell
+from mbs.counterweight import ReducedCounterweight
+from mbs.model import RunHistories
+from mbs.parameters import ModelParams
+from mbs.spectra import Spectrum
+
+FORMAT = "fretwork-results"
+FORMAT_VERSION = 1
+_XYZ = ["x (tangential)", "y (radial)", "z (crank axis)"]
+MODAL_UNITS = "mm*sqrt(t)"  # mode shapes are mass-normalised (1/sqrt(t)), u = Psi q in mm
+
+
+def acceleration_field(histories: RunHistories, reduced: ReducedCounterweight, counterweight: int,
+                       sample: int) -> np.ndarray:
+    """(n_nodes, 3) absolute acceleration (mm/s^2, CW frame) of every CW mesh node at one sample.
+
+    a = a_frame + alpha x r + omega x (omega x r) + 2 omega x (Psi q') + Psi q'', r = x + Psi q:
+    rigid-body, centrifugal, Coriolis and modal parts, the loads that drive the contact model.
+    """
+    c, s = counterweight, sample
+    psi = reduced.mode_shapes
+    deformation = (psi @ histories.cw_modal_coordinates[c, s]).reshape(-1, 3)
+    velocity = (psi @ histories.cw_modal_velocities[c, s]).reshape(-1, 3)
+    modal = (psi @ histories.cw_modal_accelerations[c, s]).reshape(-1, 3)
+    position = reduced.node_coordinates + deformation
+    omega = histories.cw_angular_velocity[c, s]
+    alpha = histories.cw_angular_acceleration[c, s]
+    centrifugal = np.cross(omega, np.cross(omega, position))
+    return (histories.cw_frame_acceleration[c, s] + np.cross(alpha, position) + centrifugal
+            + 2.0 * np.cross(omega, velocity) + modal)
+
+
+def _signal(group, name, data, units, description, components=None):
+    dataset = group.create_dataset(name, data=np.asarray(data, dtype=np.float64))
+    dataset.attrs["units"] = units
+    dataset.attrs["description"] = description
+    if components is not None:
+        dataset.attrs["components"] = list(components)
+
+
+def _history_signals(histories: RunHistories, reduced: ReducedCounterweight):
+    modes = [f"mode {k + 1} ({f:.1f} Hz)" for k, f in enumerate(reduced.eigenfrequencies)]
+    for c in range(2):
+        tag = f"cw{c + 1}"
+        com = reduced.center_of_mass
+        omega = histories.cw_angular_velocity[c]
+        yield (f"{tag}_interface_displacement", histories.cw_interface_displacement[c], "mm",
+               f"Translation of the {tag} interface relative to its web (rigid joint: constraint residual).", _XYZ)
+        yield (f"{tag}_interface_rotation", histories.cw_interface_rotation[c], "rad",
+               f"Rotation of the {tag} interface relative to its web (rigid joint: constraint residual).", _XYZ)
+        yield (f"{tag}_interface_force", histories.cw_interface_force[c], "N",
+               f"Force the web applies to {tag} at the interface (joint reaction).", _XYZ)
+        yield (f"{tag}_interface_moment", histories.cw_interface_moment[c], "N*mm",
+               f"Moment the web applies to {tag} about the interface centre (joint reaction).", _XYZ)
+        yield (f"{tag}_modal_coordinates", histories.cw_modal_coordinates[c], MODAL_UNITS,
+               f"Craig-Bampton modal coordinates of {tag} (mass-normalised fixed-interface modes).", modes)
+        yield (f"{tag}_modal_acceleration", histories.cw_modal_accelerations[c], MODAL_UNITS + "/s^2",
+               f"Second time derivative of the {tag} modal coordinates (modal acceleration field = Psi q'').", modes)
+        yield (f"{tag}_frame_acceleration", histories.cw_frame_acceleration[c], "mm/s^2",
+               f"Absolute acceleration of the {tag} interface origin (rigid-body part of the field).", _XYZ)
+        yield (f"{tag}_angular_velocity", omega, "rad/s",
+               f"Angular velocity of the {tag} frame (gives the centrifugal field omega x (omega x r)).", _XYZ)
+        yield (f"{tag}_angular_acceleration", histories.cw_angular_acceleration[c], "rad/s^2",
+               f"Angular acceleration of the {tag} frame (rigid-body field alpha x r).", _XYZ)
+        yield (f"{tag}_centrifugal_acceleration_com", np.cross(omega, np.cross(omega, com)), "mm/s^2",
+               f"Centrifugal acceleration at the {tag} centre of mass relative to the interface origin.", _XYZ)
+        yield (f"{tag}_wing_tip_displacement", histories.cw_wing_tip_axial[c], "mm",
+               f"Axial (crank-axis) deformation of the two {tag} wing tips relative to the interface.",
+               ["-x wing tip", "+x wing tip"])
+        yield (f"{tag}_wing_torsion", histories.wing_torsion[c], "mm",
+               f"Opposite-phase ('torsion') part of the {tag} wing-tip axial motion, (u(+x) - u(-x))/2.", None)
+
+
+def write_run(path, params: ModelParams, reduced: ReducedCounterweight, histories: RunHistories,
+              spectra: dict[str, Spectrum] | None = None, campbell: Campbell | None = None) -> Path:
+    """Write one run (histories, model data, optional spectra and Campbell diagram) to path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with h5py.File(path, "w") as root:
+        root.attrs["fretwork_format"] = FORMAT
+        root.attrs["format_version"] = FORMAT_VERSION
+        group = root.create_group("histories")
+        _signal(group, "time", histories.time, "s", "Sample times (fixed step).")
+        _signal(group, "crank_angle", histories.crank_angle, "rad", "Spin angle of journal 1.")
+        _signal(group, "crank_speed", histories.crank_speed, "rad/s", "Spin speed of journal 1.")
+        for name, data, units, description, components in _history_signals(histories, reduced):
+            _signal(group, name, data, units, description, components)
+        _write_model(root.create_group("model"), params, reduced, histories)
+        if spectra:
+            spectra_group = root.create_group("spectra")
+            for name, spectrum in spectra.items():
+                sub = spectra_group.create_group(name)
+                _signal(sub, "frequency", spectrum.frequency, "Hz" if not name.endswith("orders") else "order",
+                        "Frequency axis (or engine orders for order spectra).")
+                _signal(sub, "amplitude", spectrum.amplitude, "mm", "Single-sided amplitude (peak) spectrum.")
+        if campbell is not None:
+            write_campbell(root.create_group("campbell"), campbell)
+    return path
+
+
+def _write_model(group, params: ModelParams, reduced: ReducedCounterweight, histories: RunHistories) -> None:
+    group.attrs["parameters_json"] = json.dumps(asdict(params), default=sorted)
+    group.attrs["real_time_factor"] = histories.real_time_factor
+    group.attrs["acceleration_field"] = ("a = a_frame + alpha x r + omega x (omega x r) + 2 omega x (Psi q') "
+                                         "+ Psi q'', r = node_coordinates + Psi q (CW frame)")
+    _signal(group, "node_coordinates", reduced.node_coordinates, "mm", "CW mesh nodes in the CW frame.", _XYZ)
+    _signal(group, "mode_shapes", reduced.mode_shapes, "1/sqrt(t)",
+            "Mass-normalised fixed-interface modes, node-interleaved rows (3 per node).")
+    _signal(group, "eigenfrequencies", reduced.eigenfrequencies, "Hz", "Fixed-interface eigenfrequencies.")
+    group.create_dataset("interface_nodes", data=reduced.interface_nodes)
+    group.create_dataset("wing_tip_nodes", data=reduced.wing_tip_nodes)
+    group.attrs["torsion_mode"] = reduced.torsion_mode
+
+
+def write_campbell(group, campbell: Campbell) -> None:
+    _signal(group, "speed", campbell.speeds_rpm, "rpm", "Engine speeds of the diagram.")
+    _signal(group, "frequency", campbell.frequencies, "Hz", "Reduced-CW eigenfrequencies per speed (rotating frame).")
+    _signal(group, "orders", campbell.orders, "order", "Engine orders drawn as lines f = order * rpm / 60.")
+    group.attrs["crossings_json"] = json.dumps(campbell.crossings)
+
+
+def read_histories(path) -> dict[str, np.ndarray]:
+    """All ``/histories`` datasets of a results file as arrays, keyed by signal name."""
+    with h5py.File(path, "r") as root:
+        return {name: dataset[()] for name, dataset in root["histories"].items()}
