@@ -122,8 +122,18 @@ def test_free_reduced_beam_step_load_matches_full_transient(beam):
     assert np.abs(reduced - full).max() < 0.01 * np.abs(full).max()
 
 
-def test_free_reduced_body_eigenfrequencies_match_full_model(beam):
-    body, root, tip = beam
+@pytest.fixture(scope="module")
+def quadratic_beam():
+    """The same bar in quadratic tetrahedra (Tet10), 20 x 2 x 1 cells: mid-edge nodes in the mode basis."""
+    mesh = skfem.MeshTet.init_tensor(np.linspace(0, 200, 21), np.linspace(0, 20, 3), np.linspace(0, 10, 2))
+    body = assemble_elastic_body(mesh, 210_000.0, 0.3, 7.85e-9, quadratic=True)
+    x = body.coordinates
+    return body, np.flatnonzero(np.isclose(x[:, 0], 0)), np.flatnonzero(np.isclose(x[:, 0], 200))
+
+
+@pytest.mark.parametrize("which", ["beam", "quadratic_beam"])
+def test_free_reduced_body_eigenfrequencies_match_full_model(which, request):
+    body, root, tip = request.getfixturevalue(which)
     modes = floating_frame_modes(body, [root, tip], n_modes=20)
     system = exu.SystemContainer()
     mbs = system.AddSystem()
