@@ -64,6 +64,32 @@ class AccuracyReport:
     def interface_fixed_error(self) -> np.ndarray:
         return self.interface_fixed_reduced_hz / self.interface_fixed_full_hz - 1.0
 
+    @property
+    def max_error_by_modes(self) -> np.ndarray:
+        """(k,) largest |relative frequency error| for each mode count."""
+        return np.nanmax(np.abs(self.frequency_error), axis=1)
+
+    @property
+    def error_never_grows(self) -> bool:
+        """Whether the largest frequency error is non-increasing with the mode count."""
+        errors = self.max_error_by_modes
+        return bool(np.all(errors[1:] <= errors[:-1] * (1 + 1e-9)))
+
+    def summary(self) -> dict:
+        """Headline figures (JSON-ready) for a one-screen report."""
+        return {
+            "n_dofs": self.n_dofs,
+            "n_interface": self.n_interface,
+            "modes": int(self.mode_counts[-1]),
+            "rigid_modes": self.rigid_modes,
+            "max_frequency_error": float(self.max_error_by_modes[-1]),
+            "error_never_grows": self.error_never_grows,
+            "min_mac": float(np.nanmin(self.mac[-1])),
+            "max_static_interface_error": float(self.static_error.max()) if self.static_error.size else None,
+            "reduction_time_s": self.reduction_time_s,
+            "full_model_time_s": self.full_model_time_s,
+        }
+
     def to_records(self) -> list[dict]:
         """Flat rows (JSON-ready) of every compared quantity."""
         records = []

@@ -43,8 +43,12 @@ def test_clamped_body_report(bar, tmp_path):
     np.testing.assert_allclose(report.interface_fixed_error, 0.0, atol=1e-8)
     # Craig-Bampton statics are exact at the interface
     assert report.static_dofs.size == 6 and report.static_error.max() < 1e-8
+    summary = report.summary()
+    assert summary["error_never_grows"] and summary["max_frequency_error"] < 0.005
+    assert summary["max_static_interface_error"] < 1e-8
     records = report.to_records()
     json.dumps(records)
+    json.dumps(summary)
     assert {r["quantity"] for r in records} == {"frequency", "static interface displacement", "time"}
     png = plot_error_vs_modes(report, tmp_path / "error.png")
     assert png.stat().st_size > 5000 and png.read_bytes()[:4] == b"\x89PNG"
