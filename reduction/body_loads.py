@@ -82,7 +82,11 @@ def centrifugal(body: ElasticBody, angular_velocity, axis_point=None) -> np.ndar
 
 
 def mode_shape_inertia(body: ElasticBody, modes: np.ndarray) -> np.ndarray:
-    """Inertia loads -M phi_k per unit modal acceleration (mm/s^2 per unit q''), shape (n_dofs, n_modes)."""
+    """Inertia loads -M phi_k per unit modal acceleration q_k'' (1/s^2), N, shape (n_dofs, n_modes).
+
+    modes: (n_dofs, n_modes) shapes in mm per unit modal coordinate. To condense them name each
+    column, e.g. ``loads={f"mode {k}": f[:, k] for k in range(f.shape[1])}``.
+    """
     modes = np.asarray(modes, dtype=float)
     if modes.shape[0] != body.n_dofs:
         raise InputError(f"mode shapes have {modes.shape[0]} rows, the body has {body.n_dofs} DOFs")
