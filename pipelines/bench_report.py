@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import json
 import time
-import tracemalloc
+import resource
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -119,31 +119,29 @@ class RunRecord:
     iterations: list
     max_iterations: list
     cutbacks: int
-    peak_memory_mb: float
 
     def summary(self, cycle: slice) -> dict:
+        """Per-increment and per-cycle figures over the rows ``cycle`` of the history."""
         times = np.asarray(self.increment_times[cycle])
         iterations = np.asarray(self.iterations[cycle])
         return {
             "solver": self.solver, "points": self.points, "dofs": self.dofs,
-            "setup_s": round(self.setup_time, 3),
+            "setup_s": self.setup_time,
             "increment_mean_s": float(times.mean()), "increment_max_s": float(times.max()),
             "cycle_s": float(times.sum()),
             "newton_mean": float(iterations.mean()),
             "newton_max": int(np.max(self.max_iterations[cycle])),
-            "cutbacks": self.cutbacks, "peak_memory_mb": round(self.peak_memory_mb, 1),
+            "newton_max_history": int(np.max(self.max_iterations)),
+            "cutbacks": self.cutbacks,
         }
 
 
 def drive(solver, state: ContactState, case: FlatOnFlat, *, label: str, points: int, dofs: int,
-          setup_time: float, trace_memory: bool = True):
+          setup_time: float):
     """Run ``case.history`` through ``solver.increment``; returns the record and per-point fields.
 
     fields: pressure (n,) MPa, shear (n, 2) MPa and COF (n,) at the end of the history.
-    Peak memory is the Python-heap peak (tracemalloc) during the increments.
     """
-    if trace_memory:
-        tracemalloc.start()
     equilibrium = solver.initial_equilibrium()
     times, iterations, max_iterations, cutbacks = [], [], [], 0
     for amplitudes in case.history:
@@ -153,14 +151,47 @@ def drive(solver, state: ContactState, case: FlatOnFlat, *, label: str, points: 
         iterations.append(stats.iterations)
         max_iterations.append(stats.max_iterations)
         cutbacks += stats.cutbacks
-    peak = tracemalloc.get_traced_memory()[1] / 2**20 if trace_memory else float("nan")
-    if trace_memory:
-        tracemalloc.stop()
     area = solver.area
     forces = equilibrium.forces.reshape(-1, 3)
     fields = {"pressure": forces[:, 0] / area, "shear": forces[:, 1:] / area[:, None], "cof": state.cof}
-    record = RunRecord(label, points, dofs, setup_time, times, iterations, max_iterations, cutbacks, peak)
+    record = RunRecord(label, points, dofs, setup_time, times, iterations, max_iterations, cutbacks)
     return record, fields
+
+
+def run(points_per_side: int, solver: str) -> tuple[dict, dict]:
+    """Set up and run the case with the ``condensed`` or ``full`` solver: (summary, fields).
+
+    setup_s is the condensation (assemble + contact-space elimination) or the full-model
+    build. peak_rss_mb is the process's peak resident memory, meaningful when each run has
+    its own process (as in :func:`main`).
+    """
+    from contact import full_model
+    from contact.assembly import assemble
+    from contact.solver import ContactSolver
+    from contact.structure import ContactSpace
+
+    case = flat_on_flat(points_per_side)
+    start = time.perf_counter()
+    if solver == "condensed":
+        structure = assemble(case.bodies, case.slave, case.master, loads=case.loads,
+                             motions=case.motions).structure
+        engine, dofs = ContactSolver(ContactSpace(structure), case.law), structure.n_dofs
+    elif solver == "full":
+        model = full_model.build(case.bodies, case.slave, case.master, loads=case.loads,
+                                 motions=case.motions)
+        engine, dofs = full_model.FullModelSolver(model, case.law), model.n_dofs
+    else:
+        raise ValueError(f"solver must be 'condensed' or 'full', got {solver!r}")
+    setup = time.perf_counter() - start
+    record, fields = drive(engine, case.initial_state(engine.n_points), case, label=solver,
+                           points=engine.n_points, dofs=dofs, setup_time=setup)
+    summary = record.summary(case.cycle)
+    summary["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    if solver == "condensed":
+        from contact.linear import solver_for
+
+        summary["linear"] = dict(vars(solver_for(engine.space).counters))
+    return summary, fields
 
 
 def relative_difference(reference: dict, other: dict) -> float:
@@ -172,21 +203,36 @@ def relative_difference(reference: dict, other: dict) -> float:
     return worst
 
 
+COLUMNS = ("solver", "points", "dofs", "setup_s", "increment_mean_s", "increment_max_s", "cycle_s",
+           "newton_mean", "newton_max", "cutbacks", "peak_rss_mb", "speedup", "rel_diff")
+
+
 def format_table(rows: list[dict]) -> str:
     """Fixed-width text table of benchmark summaries."""
-    columns = ["solver", "points", "dofs", "setup_s", "increment_mean_s", "increment_max_s", "cycle_s",
-               "newton_mean", "newton_max", "cutbacks", "peak_memory_mb", "rel_diff"]
-    lines = [" ".join(f"{c:>16}" for c in columns)]
+    lines = [" ".join(f"{c:>16}" for c in COLUMNS)]
     for row in rows:
         cells = []
-        for c in columns:
+        for c in COLUMNS:
             value = row.get(c, "")
             cells.append(f"{value:>16.4g}" if isinstance(value, float) else f"{value!s:>16}")
         lines.append(" ".join(cells))
     return "\n".join(lines)
 
 
-def write_json(rows: list[dict], path: Path, meta: dict) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({"meta": meta, "rows": rows}, indent=2))
+def main(argv: list[str] | None = None) -> int:
+    """``python -m pipelines.bench_report POINTS_PER_SIDE SOLVER FIELDS.npz``: one run, JSON summary on stdout."""
+    import argparse
 
+    parser = argparse.ArgumentParser(description=main.__doc__)
+    parser.add_argument("points_per_side", type=int)
+    parser.add_argument("solver", choices=("condensed", "full"))
+    parser.add_argument("fields", type=Path, help="where to write the final per-point fields (.npz)")
+    args = parser.parse_args(argv)
+    summary, fields = run(args.points_per_side, args.solver)
+    np.savez(args.fields, **fields)
+    print(json.dumps(summary))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
