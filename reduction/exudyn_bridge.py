@@ -9,9 +9,15 @@ Typical use by the multibody model (3D bodies only; units mm, t, N, s throughout
 
     modes = floating_frame_modes(body, [hub_nodes, wing_nodes], n_modes=20)
     item = add_floating_body(mbs, body, modes, position=[0, 0, 0])
-    marker = mbs.AddMarker(exu.itemInterface.MarkerSuperElementRigid(
+    wing = mbs.AddMarker(MarkerSuperElementRigid(        # frame at the centroid of the wing nodes
         bodyNumber=item.object, meshNodeNumbers=modes.interface_nodes[1],
-        weightingFactors=modes.interface_weights[1], referencePosition=...))
+        weightingFactors=modes.interface_weights[1]))
+    # displacement / acceleration of a mesh node: SensorSuperElement(bodyNumber=item.object,
+    #     meshNodeNumber=k, outputVariableType=exu.OutputVariableType.Displacement)
+
+The body frame (``item.rigid_body_node``) has its origin at the mesh origin, placed at
+``position``; interface 0 moves rigidly with it (it is clamped in every mode), so a joint there
+may use ``MarkerNodeRigid`` on that node or a ``MarkerSuperElementRigid`` on interface 0.
 """
 
 from __future__ import annotations
