@@ -8,7 +8,7 @@ import skfem
 exu = pytest.importorskip("exudyn")
 from exudyn.itemInterface import (  # noqa: E402
     GenericJoint, LoadForceVector, MarkerBodyRigid, MarkerNodeRigid, MarkerSuperElementPosition,
-    ObjectGround, SensorSuperElement,
+    MarkerSuperElementRigid, ObjectGround, SensorSuperElement,
 )
 
 from reduction.coupling import rigid_couplings  # noqa: E402
@@ -167,3 +167,32 @@ def test_two_dimensional_body_is_refused(beam):
     flat = assemble_elastic_body(skfem.MeshTri().refined(1), 1000.0, 0.3, 1e-9)
     with pytest.raises(InputError, match="3D"):
         floating_frame_modes(flat, [np.array([0, 1])], n_modes=1)
+
+
+def test_body_clamped_through_a_rigid_marker_on_its_second_interface(beam):
+    """Joint on interface 1 (MarkerSuperElementRigid, the marker the multibody model uses), frame
+    free: the linearised frequencies equal the full model clamped rigidly at that face."""
+    body, root, tip = beam
+    modes = floating_frame_modes(body, [root, tip], n_modes=20)
+    system = exu.SystemContainer()
+    mbs = system.AddSystem()
+    items = add_floating_body(mbs, body, modes)
+    ground = mbs.AddObject(ObjectGround())
+    mbs.AddObject(GenericJoint(markerNumbers=[
+        mbs.AddMarker(MarkerBodyRigid(bodyNumber=ground, localPosition=list(modes.reference_points[1]))),
+        mbs.AddMarker(MarkerSuperElementRigid(bodyNumber=items.object, meshNodeNumbers=modes.interface_nodes[1],
+                                              weightingFactors=modes.interface_weights[1])),
+    ], constrainedAxes=[1] * 6))
+    mbs.Assemble()
+    eigenvalues, _ = mbs.ComputeODE2Eigenvalues()
+    reduced_hz = np.sqrt(np.sort(np.abs(eigenvalues))[:6]) / (2 * np.pi)
+
+    coupling = rigid_couplings(body.n_dofs, body.node_dofs, body.coordinates,
+                               [(root, modes.reference_points[0]), (tip, modes.reference_points[1])], rotations=True)
+    k = coupling.reduce_matrix(body.stiffness)
+    m = coupling.reduce_matrix(body.mass)
+    free = np.setdiff1d(np.arange(k.shape[0]), coupling.reference_dofs[1])
+    values = spla.eigsh(k[free][:, free].tocsc(), k=6, M=m[free][:, free].tocsc(), sigma=0, return_eigenvectors=False)
+    full_hz = np.sqrt(np.sort(values)) / (2 * np.pi)
+    assert full_hz[0] == pytest.approx(223.5, rel=1e-3)  # the cantilever again, clamped at the other end
+    np.testing.assert_allclose(reduced_hz, full_hz, rtol=0.005)
