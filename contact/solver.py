@@ -29,7 +29,8 @@ class NewtonSettings:
     """Iteration controls.
 
     max_iterations: Newton iterations per attempt before a cutback.
-    max_cutbacks: how many times an increment may be halved.
+    max_cutbacks: how many times a sub-step may be halved (smallest: 2^-max_cutbacks
+        of the increment).
     displacement_tolerance: converged when the kinematic residual is below this (mm) ...
     force_tolerance: ... and the control-DOF force residual below this fraction of the
         force scale.
@@ -233,15 +234,21 @@ class ContactSolver:
                   effects: Effects) -> tuple[Equilibrium, ContactState, np.ndarray, IncrementStats]:
         """Advance from ``start`` to the load ``amplitudes``, cutting back as needed.
 
-        Returns the converged equilibrium, the advanced state, the final point status and
-        the iteration counters. Raises :class:`ConvergenceError` after ``max_cutbacks``.
+        A sub-step that fails (or wears more than the cap) is halved; one that succeeds lets
+        the next grow back by a factor two, so an increment may take many sub-steps (a large
+        cycle jump against the wear cap) while no sub-step is smaller than 2^-max_cutbacks
+        of the increment. Returns the converged equilibrium, the advanced state, the final
+        point status and the iteration counters. Raises :class:`ConvergenceError` when a
+        sub-step of that smallest size still fails.
         """
         stats = IncrementStats()
-        targets = [(np.asarray(amplitudes, dtype=float), 0)]  # stack of (amplitudes, cutback level)
+        origin, target = start.amplitudes, np.asarray(amplitudes, dtype=float)
         equilibrium, status = start, None
-        while targets:
-            target, level = targets[-1]
-            solved = self._solve_to(equilibrium, state, target, stats)
+        done, level = 0.0, 0  # fraction of the increment solved; sub-step size 2^-level
+        while done < 1.0:
+            reach = min(1.0, done + 0.5 ** level)
+            sub_target = target if reach == 1.0 else origin + reach * (target - origin)
+            solved = self._solve_to(equilibrium, state, sub_target, stats)
             too_much_wear = False
             if solved is not None and effects.wear and np.isfinite(self.settings.wear_cap):
                 wear_now = wear_increment(solved[1], self.law, effects.cycle_jump).sum(axis=0)
@@ -252,16 +259,17 @@ class ContactSolver:
                               f"{self.settings.wear_cap:g} mm" if too_much_wear else
                               self._failure_reason())
                     raise ConvergenceError(
-                        f"increment to amplitudes {np.round(amplitudes, 6).tolist()} failed after "
-                        f"{level} cutbacks, the last converged amplitudes being "
-                        f"{np.round(equilibrium.amplitudes, 6).tolist()}: {reason}")
+                        f"increment to amplitudes {np.round(amplitudes, 6).tolist()} failed with "
+                        f"sub-steps of 2^-{level} of it ({stats.cutbacks} cutbacks), the last "
+                        f"converged amplitudes being {np.round(equilibrium.amplitudes, 6).tolist()}: "
+                        f"{reason}")
                 stats.cutbacks += 1
-                targets[-1] = (target, level + 1)
-                targets.append((0.5 * (equilibrium.amplitudes + target), level + 1))
+                level += 1
                 continue
             equilibrium, response = solved
             state, status = advance(state, response, self.law, cof_evolution=effects.cof_evolution,
                                     wear=effects.wear, cycle_jump=effects.cycle_jump)
             stats.substeps += 1
-            targets.pop()
+            done = reach
+            level = max(level - 1, 0)
         return equilibrium, state, status, stats
