@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse as sp
 
 from mbs.counterweight import ReducedCounterweight, reduced_matrices
 
@@ -40,8 +41,8 @@ class Campbell:
 def _spin_matrices(reduced: ReducedCounterweight) -> tuple[np.ndarray, np.ndarray]:
     psi = reduced.mode_shapes
     n_nodes = reduced.node_coordinates.shape[0]
-    rotate = np.kron(np.eye(n_nodes), _AXIS_CROSS)
-    project = np.kron(np.eye(n_nodes), _PLANE)
+    rotate = sp.kron(sp.identity(n_nodes), _AXIS_CROSS, format="csr")
+    project = sp.kron(sp.identity(n_nodes), _PLANE, format="csr")
     mass_psi = reduced.mass @ psi
     return psi.T @ (rotate.T @ mass_psi), psi.T @ (project @ mass_psi)
 

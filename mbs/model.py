@@ -37,7 +37,7 @@ class SimulationError(RuntimeError):
 
 
 #: Energy is evaluated on at most this many samples: the CW kinetic energy needs the full FE mass.
-ENERGY_SAMPLES = 1001
+ENERGY_SAMPLES = 201
 
 COUNTERWEIGHT_ROTATION = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
@@ -387,8 +387,8 @@ def _collect(mbs, sensors, reduced: ReducedCounterweight, energy: bool, wall_tim
         crank_speed=spin[:, 6],
         cw_interface_displacement=data["joint_displacement"],
         cw_interface_rotation=data["joint_rotation"],
-        cw_interface_force=data["joint_force"],
-        cw_interface_moment=data["joint_moment"],
+        cw_interface_force=-data["joint_force"],
+        cw_interface_moment=-data["joint_moment"],
         cw_modal_coordinates=data["q"],
         cw_modal_velocities=data["q_t"],
         cw_modal_accelerations=data["q_tt"],

@@ -31,7 +31,7 @@ def test_reduced_body_reproduces_the_fixed_interface_eigenfrequencies(reduced_cw
 
 def test_torsion_frequency_converges_under_mesh_refinement():
     coarse = reduce_counterweight(CounterweightGeometry(), n_modes=2).torsion_frequency
-    fine = reduce_counterweight(CounterweightGeometry(elements_x=20, elements_y=6, elements_z=4), n_modes=2).torsion_frequency
+    fine = reduce_counterweight(CounterweightGeometry(elements_x=20, elements_y=6, elements_z=2), n_modes=2).torsion_frequency
     assert fine < coarse  # conforming displacement FE converges from above
     assert (coarse - fine) / fine < 0.05
 
