@@ -65,7 +65,8 @@ class MeshModel:
 
     def element_set(self, name: str) -> np.ndarray:
         if name not in self.element_sets:
-            raise InputError(f"{self.source}: no element set '{name}'; available: {sorted(self.element_sets) or 'none'}")
+            available = sorted(self.element_sets) or "none"
+            raise InputError(f"{self.source}: no element set '{name}'; available: {available}")
         return self.element_sets[name]
 
     def body_nodes(self, body: ElasticBody, name: str) -> np.ndarray:
@@ -79,7 +80,8 @@ class MeshModel:
         for name, value in values_by_set.items():
             elements = self.element_set(name)
             if np.any(~np.isnan(values[elements]) & (values[elements] != value)):
-                raise InputError(f"{self.source}: element set '{name}' overlaps another set with a different {quantity}")
+                raise InputError(
+                    f"{self.source}: element set '{name}' overlaps another set with a different {quantity}")
             values[elements] = value
         missing = np.flatnonzero(np.isnan(values))
         if missing.size:

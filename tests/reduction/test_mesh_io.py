@@ -76,7 +76,8 @@ def test_materials_per_element_set_change_the_stiffness(tmp_path):
     points, cells = _bar_tets()
     centre_x = points[cells].mean(axis=1)[:, 0]
     sets = {"STEEL": [np.flatnonzero(centre_x < LENGTH / 2)], "ALU": [np.flatnonzero(centre_x >= LENGTH / 2)]}
-    meshio.write(tmp_path / "bar.inp", meshio.Mesh(points, [("tetra", cells)], point_sets=_sets(points), cell_sets=sets))
+    meshio.write(tmp_path / "bar.inp",
+                 meshio.Mesh(points, [("tetra", cells)], point_sets=_sets(points), cell_sets=sets))
     model = read_mesh(tmp_path / "bar.inp")
     uniform = assemble_elastic_body(model.mesh, 210_000.0, 0.3)
     mixed = assemble_elastic_body(model.mesh, model.per_element({"STEEL": 210_000.0, "ALU": 70_000.0}, "E"), 0.3)
