@@ -188,13 +188,68 @@ class FullEquilibrium:
     amplitudes: np.ndarray
 
 
-def sparse_lu_solver():
-    """``solve(A, b)`` by a fresh sparse LU of the unsymmetric A: MKL PARDISO if installed, else SuperLU."""
-    if pardiso.available():
-        from pypardiso import PyPardisoSolver
+class TangentAssembler:
+    """K + Gᵀ·blockdiag(A·D)·G on one fixed sparsity pattern, as one sparse product per iteration.
 
-        return PyPardisoSolver(mtype=11).solve
-    return lambda matrix, rhs: spla.splu(matrix.tocsc()).solve(rhs)
+    The pattern is that of K + Gᵀ·B·G with B full dim×dim blocks, so it does not change when
+    tangent entries vanish (open points, zero trial slip); the sparse LU can then keep its
+    ordering and symbolic analysis. ``values(blocks)`` are K's entries plus L·vec(blocks),
+    L mapping every per-point tangent entry onto the matrix entries it feeds.
+    """
+
+    def __init__(self, stiffness: sp.csr_matrix, operator: sp.csr_matrix, dim: int):
+        n = stiffness.shape[0]
+        G = operator.tocoo()
+        order = np.argsort(G.row, kind="stable")
+        rows, cols, vals = G.row[order], G.col[order], G.data[order]
+        point = rows // dim
+        counts = np.bincount(point, minlength=operator.shape[0] // dim)
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        # All pairs (e1, e2) of G entries of the same point: e1 repeated, e2 running over the point.
+        first = np.repeat(np.arange(rows.size), counts[point])
+        offsets = np.arange(first.size) - np.repeat(np.cumsum(counts[point]) - counts[point], counts[point])
+        second = starts[point[first]] + offsets
+        keys_contact = cols[first].astype(np.int64) * n + cols[second]
+        K = stiffness.tocoo()
+        keys_stiffness = K.row.astype(np.int64) * n + K.col
+        keys = np.unique(np.concatenate([keys_stiffness, keys_contact]))
+        self.indices = (keys % n).astype(np.int32)
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(keys // n, minlength=n))]).astype(np.int32)
+        self.stiffness_values = np.bincount(np.searchsorted(keys, keys_stiffness), weights=K.data,
+                                            minlength=keys.size)
+        block_entry = point[first] * dim * dim + (rows[first] % dim) * dim + rows[second] % dim
+        self.spread = sp.csr_matrix((vals[first] * vals[second], (np.searchsorted(keys, keys_contact), block_entry)),
+                                    shape=(keys.size, counts.size * dim * dim))
+        self.shape = (n, n)
+
+    def matrix(self, blocks: np.ndarray) -> sp.csr_matrix:
+        """The tangent for per-point blocks (n_points, dim, dim), N/mm."""
+        values = self.stiffness_values + self.spread @ blocks.ravel()
+        return sp.csr_matrix((values, self.indices, self.indptr), shape=self.shape)
+
+
+class SparseLU:
+    """Repeated LU solves of matrices with one sparsity pattern (unsymmetric).
+
+    MKL PARDISO when installed: the ordering and symbolic analysis are done once, then each
+    call refactorises numerically and solves. Otherwise SciPy's SuperLU from scratch each call.
+    """
+
+    def __init__(self, pattern: sp.csr_matrix):
+        self.name = "pardiso" if pardiso.available() else "splu"
+        if self.name == "pardiso":
+            from pypardiso import PyPardisoSolver
+
+            self._pardiso = PyPardisoSolver(mtype=11)
+            self._pardiso._check_A(pattern)
+            self._pardiso.set_phase(11)
+            self._pardiso._call_pardiso(pattern, np.zeros(pattern.shape[0]))
+
+    def solve(self, matrix: sp.csr_matrix, rhs: np.ndarray) -> np.ndarray:
+        if self.name == "pardiso":
+            self._pardiso.set_phase(23)
+            return self._pardiso._call_pardiso(matrix, np.asfortranarray(rhs, dtype=float))
+        return spla.splu(matrix.tocsc()).solve(rhs)
 
 
 class FullModelSolver:
@@ -210,7 +265,8 @@ class FullModelSolver:
         self.h0 = model.initial_overclosure
         self.G = model.contact_operator.tocsr()
         self.GT = self.G.T.tocsr()
-        self._solve = sparse_lu_solver()
+        self._assembler = TangentAssembler(model.stiffness, self.G, self.dim)
+        self._lu = SparseLU(self._assembler.matrix(np.ones((self.n_points, self.dim, self.dim))))
 
     def initial_equilibrium(self) -> FullEquilibrium:
         rows = self.n_points * self.dim
@@ -232,14 +288,6 @@ class FullModelSolver:
         forces = self._forces(response)
         return self.model.stiffness @ u + self.GT @ forces - external, kinematics, response, forces
 
-    def _tangent(self, response: Response) -> sp.csr_matrix:
-        blocks = tangent_blocks(response, self.area)
-        n, dim = self.n_points, self.dim
-        rows = np.repeat(np.arange(n * dim).reshape(n, dim, 1), dim, axis=2)
-        cols = np.repeat(np.arange(n * dim).reshape(n, 1, dim), dim, axis=1)
-        D = sp.csr_matrix((blocks.ravel(), (rows.ravel(), cols.ravel())), shape=(n * dim, n * dim))
-        return (self.model.stiffness + self.GT @ D @ self.G).tocsr()
-
     def _solve_to(self, start: FullEquilibrium, state: ContactState, amplitudes: np.ndarray,
                   stats: IncrementStats):
         model, settings = self.model, self.settings
@@ -252,7 +300,7 @@ class FullModelSolver:
         residual, kinematics, response, forces = self._residual(u, external, state, reference)
         merit = float(np.linalg.norm(residual)) / force_tolerance
         for iteration in range(1, settings.max_iterations + 1):
-            delta = -self._solve(self._tangent(response), residual)
+            delta = -self._lu.solve(self._assembler.matrix(tangent_blocks(response, self.area)), residual)
             step = 1.0
             while True:
                 trial = self._residual(u + step * delta, external, state, reference)

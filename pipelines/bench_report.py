@@ -68,7 +68,7 @@ def box_body(mesh: skfem.MeshHex, youngs_modulus: float, poisson_ratio: float) -
 
 
 def flat_on_flat(points_per_side: int, *, size: float = 10.0, height: float = 5.0,
-                 layers: int = 6, pressure: float = 100.0, slip_amplitude: float = 2.0e-3,
+                 layers: int = 6, pressure: float = 100.0, slip_amplitude: float = 5.0e-3,
                  increments_per_quarter: int = 5, cycles: int = 1,
                  youngs_modulus: float = 210e3, poisson_ratio: float = 0.3) -> FlatOnFlat:
     """Two ``size``×``size``×``height`` mm blocks, ``points_per_side``² contact points.
