@@ -79,7 +79,7 @@ class IncrementStats:
     substeps: int = 0
 
 
-def _rigid_modes(space: ContactSpace) -> np.ndarray:
+def _rigid_modes(space: ContactSpace, stiffness_scale: float) -> np.ndarray:
     """Orthonormal rigid-body motions of the free control DOFs, (n_control, k).
 
     These are the directions in which a body is held by the contact alone (S_q singular,
@@ -89,8 +89,7 @@ def _rigid_modes(space: ContactSpace) -> np.ndarray:
     if space.n_control == 0:
         return np.zeros((0, 0))
     values, vectors = np.linalg.eigh(space.Sq)
-    scale = float(np.abs(np.diag(space.structure.stiffness)).max())
-    return vectors[:, values <= 1e-8 * scale]
+    return vectors[:, values <= 1e-8 * stiffness_scale]
 
 
 class ContactSolver:
@@ -105,7 +104,8 @@ class ContactSolver:
         self.n_points = structure.n_points
         self.area = structure.area
         self.h0 = structure.initial_overclosure
-        self.rigid_modes = _rigid_modes(space)
+        self.stiffness_scale = float(np.abs(np.diag(structure.stiffness)).max())  # N/mm
+        self.rigid_modes = _rigid_modes(space, self.stiffness_scale)
         self._last_failure = None  # (response, r_ctl, force scale) of the last failed attempt
         # S_q without the round-off stiffness (~1e-8 N/mm) of the rigid modes: left in, it
         # would let a body loaded beyond the friction limit find a spurious equilibrium
@@ -143,20 +143,25 @@ class ContactSolver:
         return float(np.sqrt(np.sum((r_kin / self.settings.displacement_tolerance) ** 2)
                              + np.sum((r_ctl / (self.settings.force_tolerance * force_scale)) ** 2)))
 
-    def _newton_step(self, response: Response, g, state: ContactState, r_kin, r_ctl):
+    def _newton_step(self, response: Response, g, state: ContactState, r_kin, r_ctl, loaded: bool):
         """Solve J·[Δg, Δq] = −[r_kin, r_ctl] for the current consistent tangent.
 
-        With no point pressed (p > 0) a force-controlled body floats and J is singular: an
+        With no point pressed (p > 0) a body held by the contact alone has a singular J: an
         open interface has no stiffness, and points that just touch (flat blocks placed
-        face to face) have the normal one but no tangential one. The points
-        nearest to contact then get the penalty stiffness, normal and tangential, in the
-        tangent only, so the step carries the body into contact without sliding it (a
-        tangentially free body would otherwise be moved arbitrarily far along its singular
-        rigid modes and land with every point sliding); the residual stays exact, so the
-        converged answer does too.
+        face to face) have the normal one but no tangential one. If a load acts along such
+        a rigid mode (``loaded``) the body must be brought into contact: the points nearest
+        to contact get the penalty stiffness, normal and tangential, in the tangent only,
+        so the step carries the body into contact without sliding it (a tangentially free
+        body would otherwise be moved arbitrarily far along its singular rigid modes and
+        land with every point sliding); the residual stays exact, so the converged answer
+        does too. If no load acts along them and every point is open, the exact step is
+        taken with no motion along the rigid modes (the body stays where it is).
         """
         blocks = tangent_blocks(response, self.area)
-        searching = not np.any(response.pressure > 0.0) and self.rigid_modes.shape[1] > 0
+        unpressed = not np.any(response.pressure > 0.0) and self.rigid_modes.shape[1] > 0
+        if unpressed and not loaded and not np.any(blocks):
+            return (*self._open_step(r_kin, r_ctl), False)
+        searching = unpressed
         if searching:
             penetration = self.h0 + g.reshape(self.n_points, self.dim)[:, 0] - state.gap
             nearest = penetration >= penetration.max() - 1e-9
@@ -164,6 +169,13 @@ class ContactSolver:
             penalty = kn[nearest] * self.area[nearest]
             blocks[nearest] = penalty[:, None, None] * np.eye(self.dim)
         return (*solve_newton_system(self.space, blocks, r_kin, r_ctl), searching)
+
+    def _open_step(self, r_kin, r_ctl):
+        """Exact Newton step with every point open: S_q·Δq = −r_ctl off the rigid modes."""
+        modes = self.rigid_modes
+        delta_q = np.linalg.solve(self.control_stiffness + self.stiffness_scale * modes @ modes.T, -r_ctl)
+        delta_q -= modes @ (modes.T @ delta_q)
+        return -r_kin - self.space.E @ delta_q, delta_q
 
     def _solve_to(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
                   stats: IncrementStats) -> tuple[Equilibrium, Response] | None:
@@ -173,6 +185,12 @@ class ContactSolver:
                           float(np.max(np.abs(start.forces), initial=0.0)))
         reference = start.kinematics
         q = start.control.copy()
+        # A load along a rigid mode: with no point pressed the body floats (no equilibrium).
+        # Prescribed motions leave round-off there (K·rigid mode ≈ 0), hence their scale.
+        motion = float(np.max(np.abs(self.space.pattern_motion @ amplitudes), initial=0.0))
+        drive_scale = force_scale + self.stiffness_scale * motion
+        loaded = bool(np.any(np.abs(self.rigid_modes.T @ f_q)
+                             > self.settings.force_tolerance * drive_scale))
         # Two predictors: the contact kinematics follow the drive (right in gross slip and for
         # a free approach) or stay put (right where the interface sticks; with a stiff elastic
         # stick, small γ_crit, following the drive makes every point slide at first and
@@ -185,7 +203,7 @@ class ContactSolver:
                 best = (candidate_merit, g, candidate)
         merit, g, (r_kin, r_ctl, response, forces) = best
         for iteration in range(1, self.settings.max_iterations + 1):
-            delta_g, delta_q, searching = self._newton_step(response, g, state, r_kin, r_ctl)
+            delta_g, delta_q, searching = self._newton_step(response, g, state, r_kin, r_ctl, loaded)
             step = 1.0
             # A contact-search step (no point closed yet) is taken whole: the merit of the
             # open configuration is no guide to how far the body has to move.
@@ -203,8 +221,7 @@ class ContactSolver:
             merit = trial_merit
             if not np.all(np.isfinite(g)) or not np.all(np.isfinite(q)):
                 break
-            floating = (not np.any(response.dpressure_dh > 0.0)
-                        and np.any(np.abs(self.rigid_modes.T @ f_q) > 1e-12 * force_scale))
+            floating = loaded and not np.any(response.dpressure_dh > 0.0)
             if self._converged(r_kin, r_ctl, force_scale) and not floating:
                 stats.iterations += iteration
                 stats.max_iterations = max(stats.max_iterations, iteration)
