@@ -90,14 +90,16 @@ def cylinder(*, contact_size: float = 0.1, normal: str = "force", tangential: st
                 model.assembly.structure.patterns, model.assembly.pairing.slave.coordinates, model)
 
 
-def flat(points_per_side: int = 5, *, tangential: str = "motion", law: ContactLaw | None = None,
-         cof0: float = 0.2, wear_bodies: int | None = None,
+def flat(points_per_side: int = 5, *, normal: str = "force", tangential: str = "motion",
+         law: ContactLaw | None = None, cof0: float = 0.2, wear_bodies: int | None = None,
          settings: NewtonSettings | None = None, **geometry) -> Case:
     """Two 10×10×5 mm steel blocks, ``points_per_side``² contact points; the punch is pressed
-    by a force ("normal", N per unit amplitude, downwards) and driven in x ("tangential") by a
-    motion (mm) or, with ``tangential="force"``, by a force (N)."""
+    down ("normal") and driven in x ("tangential"), each by a force (N per unit amplitude)
+    or a motion (mm per unit amplitude) as ``normal`` / ``tangential`` say."""
     case = flat_on_flat(points_per_side, layers=geometry.pop("layers", 3), **geometry)
     loads, motions = dict(case.loads), dict(case.motions)
+    if normal == "motion":
+        motions["normal"] = loads.pop("normal")
     if tangential == "force":
         loads["tangential"] = motions.pop("tangential")
     structure = assemble(case.bodies, case.slave, case.master, loads=loads,
