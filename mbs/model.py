@@ -348,6 +348,7 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None
     settings.timeIntegration.verboseMode = 0
     settings.timeIntegration.generalizedAlpha.spectralRadius = solver.spectral_radius
     settings.timeIntegration.newton.useModifiedNewton = True
+    settings.timeIntegration.newton.relativeTolerance = solver.newton_tolerance
     settings.solutionSettings.writeSolutionToFile = False
     settings.solutionSettings.sensorsWritePeriod = solver.time_step
     settings.displayStatistics = False
@@ -366,8 +367,11 @@ def _stored(mbs, sensor) -> np.ndarray:
 
 def _collect(mbs, sensors, reduced: ReducedCounterweight, energy: bool, wall_time: float) -> RunHistories:
     spin = _stored(mbs, sensors["spin"])
+    # Sensors write when t reaches the next write time; round-off can store one instant twice.
+    keep = np.concatenate([[True], np.diff(spin[:, 0]) > 0.5 * np.median(np.diff(spin[:, 0]))])
+    spin = spin[keep]
     time = spin[:, 0]
-    data = {key: np.stack([_stored(mbs, sensors[(key, c)])[:, 1:] for c in range(2)])
+    data = {key: np.stack([_stored(mbs, sensors[(key, c)])[keep, 1:] for c in range(2)])
             for key in ("q", "q_t", "q_tt", "rotation", "acceleration", "omega", "alpha", "velocity",
                         "joint_displacement", "joint_rotation", "joint_force", "joint_moment")}
     rotation = data["rotation"].reshape(2, -1, 3, 3)
@@ -377,13 +381,13 @@ def _collect(mbs, sensors, reduced: ReducedCounterweight, energy: bool, wall_tim
     if energy:
         picked = np.unique(np.linspace(0, len(time) - 1, ENERGY_SAMPLES).astype(int))
         energy_time = time[picked]
-        total_energy = sum(_stored(mbs, s)[picked, 1] for s in sensors["kinetic"] + sensors["potential"])
+        total_energy = sum(_stored(mbs, s)[keep][picked, 1] for s in sensors["kinetic"] + sensors["potential"])
         for c in range(2):
             total_energy = total_energy + _counterweight_energy(
                 reduced, *(data[key][c][picked] for key in ("rotation", "velocity", "omega", "q", "q_t")))
     return RunHistories(
         time=time,
-        crank_angle=_stored(mbs, sensors["angle"])[:, 6],
+        crank_angle=_stored(mbs, sensors["angle"])[keep, 6],
         crank_speed=spin[:, 6],
         cw_interface_displacement=data["joint_displacement"],
         cw_interface_rotation=data["joint_rotation"],

@@ -109,6 +109,8 @@ class SolverParams:
     damping: False switches off all physical damping (bearings, pin, CW modes, shaft).
     drive: "constant_speed" holds the drive at engine speed (ideal governor and flywheel);
     "free": no drive, the shaft starts at engine speed and spins freely (energy check).
+    newton_tolerance: relative Newton tolerance; exudyn's default 1e-8 is below the round-off
+    of the stiff bearing/pin springs and makes Newton fail on stiff throws.
     """
 
     time_step: float = 5.0e-5
@@ -116,6 +118,7 @@ class SolverParams:
     spectral_radius: float = 0.9
     damping: bool = True
     drive: str = "constant_speed"
+    newton_tolerance: float = 1e-6
 
     def validate(self) -> None:
         if self.time_step <= 0 or self.revolutions <= 0:

@@ -1,0 +1,76 @@
+"""Command-line part of the engine-speed sweep: `fretwork sweep SCENE.toml --speeds 500:800:10`.
+
+The lead's CLI registers the sub-command with add_sweep_parser(subparsers) and dispatches to
+run_sweep(args). Prints a summary table (or JSON with --json); the progress bar goes to stderr.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from mbs.plots import plot_campbell, plot_sweep
+from mbs.scene import load_model_params
+from mbs.sweep import parse_speeds, speed_sweep
+from reduction.errors import InputError
+
+
+def add_sweep_parser(subparsers):
+    """Add the `sweep` sub-command to an argparse subparsers object; returns the parser."""
+    parser = subparsers.add_parser(
+        "sweep", help="engine-speed sweep of the crankshaft-counterweight model",
+        description="Run the multibody model at each engine speed; report wing torsion amplitude, "
+                    "dominant frequencies and order/mode crossings; write one HDF5 file.")
+    parser.add_argument("scene", help="scene TOML file (its [mbs] table sets the model)")
+    parser.add_argument("--speeds", required=True, help="START:STOP:STEP or a comma list, rpm (e.g. 500:800:10)")
+    parser.add_argument("--out", default="results/sweep.h5", help="HDF5 file for the sweep (default: %(default)s)")
+    parser.add_argument("--plots", default=None, help="folder for sweep and Campbell PNG plots (default: beside --out)")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
+    parser.set_defaults(handler=run_sweep)
+    return parser
+
+
+def _table(result) -> str:
+    lines = [f"{'rpm':>8} {'CW1 wing um':>12} {'CW2 wing um':>12} {'f1 Hz':>9} {'f2 Hz':>9}  note"]
+    for i, speed in enumerate(result.speeds_rpm):
+        amplitude = 1e3 * result.wing_amplitude[i]
+        f = result.dominant_frequencies[i]
+        note = "FAILED: " + result.failures[float(speed)] if float(speed) in result.failures else (
+            "order/mode crossing" if result.resonance[i] else "")
+        lines.append(f"{speed:8.1f} {amplitude[0]:12.3f} {amplitude[1]:12.3f} {f[0]:9.1f} {f[1]:9.1f}  {note}")
+    for crossing in result.crossings:
+        lines.append(f"crossing: order {crossing['order']:g} meets mode {crossing['mode'] + 1} at "
+                     f"{crossing['speed_rpm']:.1f} rpm ({crossing['frequency_hz']:.1f} Hz)")
+    return "\n".join(lines)
+
+
+def run_sweep(args) -> int:
+    """Run the sweep described by parsed args; 0 if at least one speed converged, 1 if none, 2 on bad input."""
+    try:
+        params = load_model_params(args.scene)
+        speeds = parse_speeds(args.speeds)
+    except InputError as error:
+        print(f"fretwork sweep: {error}", file=sys.stderr)
+        return 2
+    with tqdm(total=len(speeds), unit="speed", file=sys.stderr, desc="sweep") as bar:
+        def progress(speed, message):
+            bar.set_postfix_str(f"{speed:.0f} rpm" + (" FAILED" if message else ""))
+            bar.update(1)
+
+        result = speed_sweep(params, speeds, path=args.out, progress=progress)
+    plots = Path(args.plots) if args.plots else Path(args.out).parent
+    crossing_speeds = [c["speed_rpm"] for c in result.crossings]
+    plot_sweep(result.speeds_rpm, result.wing_amplitude, plots / "sweep_wing_amplitude.png", crossings_rpm=crossing_speeds)
+    plot_campbell(result.campbell, plots / "campbell.png")
+    if args.json:
+        summary = result.to_json()
+        summary["file"] = str(args.out)
+        print(json.dumps(summary, indent=2))
+    else:
+        print(_table(result))
+        print(f"results: {args.out}")
+    return 0 if np.isfinite(result.wing_amplitude).any() else 1

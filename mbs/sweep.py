@@ -1,0 +1,171 @@
+"""Engine-speed sweep: wing amplitude and dominant frequencies per speed, resonance crossings.
+
+Each speed is one fixed-step run of the model (the CW reduction is done once). The first half of
+every run is the start-up transient and is discarded; amplitudes and spectra use the second half,
+so choose SolverParams.revolutions long enough for the transient to decay (a few times
+1 / (damping ratio x 2 pi f) of the torsion mode). A speed whose time integration fails is
+recorded in `failures` and the sweep goes on. Units: rpm, Hz, mm.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Callable
+
+import exudyn as exu
+import h5py
+import numpy as np
+
+from mbs.campbell import Campbell, campbell_diagram, order_crossings
+from mbs.counterweight import reduce_counterweight
+from mbs.excitation import excitation_orders
+from mbs.model import SimulationError, simulate, system_eigenfrequencies
+from mbs.parameters import ModelParams
+from mbs.results import FORMAT, FORMAT_VERSION, write_campbell
+from mbs.spectra import amplitude_spectrum, dominant_frequencies
+from reduction.errors import InputError
+
+#: Number of dominant frequencies recorded per speed and number of system modes kept.
+N_DOMINANT = 3
+N_SYSTEM_MODES = 24
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """speeds_rpm (n,); wing_amplitude (n, 2) mm: half peak-to-peak of the wing torsion of CW1,
+    CW2 in the evaluation window (NaN where the run failed); dominant_frequencies (n, 3) Hz of the
+    CW1 wing torsion, strongest first; dominant_orders (n, 3) the same in engine orders;
+    real_time_factor (n,); system_frequencies (n, N_SYSTEM_MODES) Hz: coupled model eigenfrequencies;
+    crossings: engine-order lines meeting system modes (dicts: order, mode, speed_rpm,
+    frequency_hz); resonance: (n,) True where a crossing lies within half a sweep step;
+    failures: {speed_rpm: message}; campbell: the reduced-CW Campbell diagram.
+    """
+
+    speeds_rpm: np.ndarray
+    wing_amplitude: np.ndarray
+    dominant_frequencies: np.ndarray
+    dominant_orders: np.ndarray
+    real_time_factor: np.ndarray
+    system_frequencies: np.ndarray
+    crossings: list
+    resonance: np.ndarray
+    failures: dict
+    campbell: Campbell
+
+    def peak_speed(self, counterweight: int = 0) -> float:
+        """Speed (rpm) of the largest wing amplitude among the converged runs."""
+        return float(self.speeds_rpm[np.nanargmax(self.wing_amplitude[:, counterweight])])
+
+    def to_json(self) -> dict:
+        """Plain summary for --json output."""
+        return {
+            "speeds_rpm": self.speeds_rpm.tolist(),
+            "wing_amplitude_mm": [[None if np.isnan(v) else float(v) for v in row] for row in self.wing_amplitude],
+            "dominant_frequencies_hz": [[None if np.isnan(v) else float(v) for v in row] for row in self.dominant_frequencies],
+            "resonance": self.resonance.tolist(),
+            "crossings": self.crossings,
+            "failures": {str(k): v for k, v in self.failures.items()},
+            "peak_speed_rpm": self.peak_speed() if np.isfinite(self.wing_amplitude).any() else None,
+        }
+
+
+def parse_speeds(text: str) -> np.ndarray:
+    """'500:800:10' -> 500, 510, ..., 800 rpm (end included); '600,650,700' -> a list."""
+    try:
+        if ":" in text:
+            start, stop, step = (float(v) for v in text.split(":"))
+            if step <= 0 or stop < start:
+                raise ValueError
+            return np.arange(start, stop + 0.5 * step, step)
+        return np.asarray([float(v) for v in text.split(",")])
+    except ValueError:
+        raise InputError(f"speeds {text!r}: use START:STOP:STEP with STEP > 0 and STOP >= START, "
+                         "or a comma-separated list (rpm)") from None
+
+
+def _evaluate(run, shaft_speed: float):
+    half = len(run.time) // 2
+    torsion = run.wing_torsion[:, half:]
+    amplitude = 0.5 * (torsion.max(axis=1) - torsion.min(axis=1))
+    spectrum = amplitude_spectrum(run.time[half:], torsion[0])
+    resolution = spectrum.frequency[1]
+    frequencies = np.full(N_DOMINANT, np.nan)
+    found = dominant_frequencies(spectrum, N_DOMINANT, min_separation=3.0 * resolution)
+    frequencies[: len(found)] = found
+    return amplitude, frequencies, frequencies / (shaft_speed / (2.0 * np.pi))
+
+
+def speed_sweep(model_params: ModelParams, speeds, *, path=None,
+                progress: Callable[[float, str | None], None] | None = None) -> SweepResult:
+    """Run model_params at every engine speed in `speeds` (rpm) and collect the sweep.
+
+    path: optional HDF5 file for the whole sweep (group /sweep, Campbell in /campbell).
+    progress: called after each speed with (speed_rpm, failure message or None).
+    """
+    speeds = np.asarray(speeds, dtype=float)
+    if speeds.ndim != 1 or speeds.size == 0 or np.any(speeds <= 0):
+        raise InputError("sweep speeds must be a non-empty list of positive engine speeds (rpm)")
+    model_params.validate()
+    reduced = reduce_counterweight(model_params.counterweight, model_params.n_modes)
+    n = speeds.size
+    amplitude = np.full((n, 2), np.nan)
+    frequencies = np.full((n, N_DOMINANT), np.nan)
+    orders = np.full((n, N_DOMINANT), np.nan)
+    real_time = np.full(n, np.nan)
+    system = np.full((n, N_SYSTEM_MODES), np.nan)
+    failures = {}
+    for i, speed in enumerate(speeds):
+        params = replace(model_params, speed_rpm=float(speed))
+        eigen = system_eigenfrequencies(params, reduced, max_frequency=np.inf)[:N_SYSTEM_MODES]
+        system[i, : eigen.size] = eigen
+        message = None
+        try:
+            run = simulate(params, reduced=reduced)
+            amplitude[i], frequencies[i], orders[i] = _evaluate(run, params.shaft_speed)
+            real_time[i] = run.real_time_factor
+        except (SimulationError, exu.SolverError) as error:
+            message = str(error) or f"time integration failed at {speed} rpm"
+            failures[float(speed)] = message
+        if progress is not None:
+            progress(float(speed), message)
+    active_orders = excitation_orders(model_params.excitation, model_params.effects)
+    crossings = order_crossings(speeds, system, active_orders) if n > 1 else []
+    half_step = 0.5 * np.min(np.diff(speeds)) if n > 1 else 0.0
+    resonance = np.array([any(abs(c["speed_rpm"] - s) <= half_step for c in crossings) for s in speeds])
+    result = SweepResult(
+        speeds_rpm=speeds, wing_amplitude=amplitude, dominant_frequencies=frequencies, dominant_orders=orders,
+        real_time_factor=real_time, system_frequencies=system, crossings=crossings, resonance=resonance,
+        failures=failures, campbell=campbell_diagram(reduced, speeds, active_orders),
+    )
+    if path is not None:
+        write_sweep(path, result)
+    return result
+
+
+def write_sweep(path, result: SweepResult) -> Path:
+    """One HDF5 file for the whole sweep: /sweep datasets and the /campbell diagram."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with h5py.File(path, "w") as root:
+        root.attrs["fretwork_format"] = FORMAT
+        root.attrs["format_version"] = FORMAT_VERSION
+        group = root.create_group("sweep")
+        fields = [
+            ("speed", result.speeds_rpm, "rpm", "Engine speeds of the sweep."),
+            ("wing_amplitude", result.wing_amplitude, "mm", "Wing torsion amplitude of CW1, CW2 (NaN: failed)."),
+            ("dominant_frequencies", result.dominant_frequencies, "Hz", "Strongest CW1 wing-torsion frequencies."),
+            ("dominant_orders", result.dominant_orders, "order", "The same frequencies in engine orders."),
+            ("real_time_factor", result.real_time_factor, "-", "Simulated seconds per wall-clock second."),
+            ("system_frequencies", result.system_frequencies, "Hz", "Coupled model eigenfrequencies per speed."),
+            ("resonance", result.resonance.astype(np.int8), "-", "1 where an order line crosses a mode."),
+        ]
+        for name, data, units, description in fields:
+            dataset = group.create_dataset(name, data=data)
+            dataset.attrs["units"] = units
+            dataset.attrs["description"] = description
+        group.attrs["crossings_json"] = json.dumps(result.crossings)
+        group.attrs["failures_json"] = json.dumps({str(k): v for k, v in result.failures.items()})
+        write_campbell(root.create_group("campbell"), result.campbell)
+    return path

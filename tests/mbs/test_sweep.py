@@ -1,0 +1,88 @@
+"""Engine-speed sweep: the wing resonance sits at the Campbell crossing; failures do not stop it;
+the CLI writes one HDF5 file and JSON."""
+
+import argparse
+import json
+from dataclasses import replace
+
+import h5py
+import numpy as np
+import pytest
+
+import mbs.sweep as sweep_module
+from mbs.cli import add_sweep_parser
+from mbs.model import SimulationError
+from mbs.parameters import CrankThrowParams, ModelParams, SolverParams
+from mbs.sweep import parse_speeds, speed_sweep
+from reduction.errors import InputError
+
+
+def stiff_throw(factor=100.0):
+    throw = CrankThrowParams()
+    return replace(throw, bearing_stiffness=throw.bearing_stiffness * factor,
+                   axial_stiffness=throw.axial_stiffness * factor,
+                   pin_stiffness=tuple(np.asarray(throw.pin_stiffness) * factor))
+
+
+def test_gear_mesh_resonance_peaks_at_the_campbell_crossing_within_one_step(tmp_path):
+    params = ModelParams(n_modes=4, throw=stiff_throw(), effects=frozenset({"gear_mesh"}),
+                         solver=SolverParams(revolutions=1.5, time_step=5e-5))
+    step = 10.0
+    result = speed_sweep(params, np.arange(620.0, 680.0 + 1, step), path=tmp_path / "sweep.h5")
+    torsion_crossings = [c["speed_rpm"] for c in result.crossings if c["order"] == params.excitation.gear_teeth]
+    nearest = min(torsion_crossings, key=lambda s: abs(s - result.peak_speed()))
+    assert abs(result.peak_speed() - nearest) <= step
+    peak = np.nanargmax(result.wing_amplitude[:, 0])
+    assert result.wing_amplitude[peak, 0] > 2.0 * result.wing_amplitude[[0, -1], 0].max()
+    assert result.resonance[peak] or result.resonance[max(peak - 1, 0)] or result.resonance[min(peak + 1, len(result.resonance) - 1)]
+    assert result.dominant_orders[peak, 0] == pytest.approx(params.excitation.gear_teeth, rel=0.02)
+    with h5py.File(tmp_path / "sweep.h5") as root:
+        assert root.attrs["fretwork_format"] == "fretwork-results"
+        assert root["sweep/wing_amplitude"].shape == (7, 2)
+        assert root["sweep/wing_amplitude"].attrs["units"] == "mm"
+
+
+def test_a_failing_speed_is_reported_and_the_sweep_continues(monkeypatch):
+    real_simulate = sweep_module.simulate
+
+    def flaky(params, **kwargs):
+        if params.speed_rpm == 700.0:
+            raise SimulationError("time integration did not converge at 700.0 rpm")
+        return real_simulate(params, **kwargs)
+
+    monkeypatch.setattr(sweep_module, "simulate", flaky)
+    params = ModelParams(n_modes=2, effects=frozenset({"gear_mesh"}), solver=SolverParams(revolutions=0.5, time_step=1e-4))
+    result = speed_sweep(params, [700.0, 750.0])
+    assert list(result.failures) == [700.0]
+    assert np.isnan(result.wing_amplitude[0]).all()
+    assert np.isfinite(result.wing_amplitude[1]).all()
+
+
+def test_speed_ranges_parse_with_end_included_and_bad_ones_are_named():
+    assert parse_speeds("500:800:100").tolist() == [500.0, 600.0, 700.0, 800.0]
+    assert parse_speeds("600,650").tolist() == [600.0, 650.0]
+    with pytest.raises(InputError, match="speeds '800:500:10'"):
+        parse_speeds("800:500:10")
+
+
+def test_cli_sweep_writes_hdf5_plots_and_json(tmp_path, capsys):
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[mbs]\nn_modes = 2\neffects = ["gear_mesh"]\n[mbs.solver]\nrevolutions = 0.5\ntime_step = 1e-4\n')
+    parser = argparse.ArgumentParser()
+    add_sweep_parser(parser.add_subparsers())
+    out = tmp_path / "out" / "sweep.h5"
+    args = parser.parse_args(["sweep", str(scene), "--speeds", "700:750:50", "--out", str(out), "--json"])
+    assert args.handler(args) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["speeds_rpm"] == [700.0, 750.0]
+    assert out.exists() and (out.parent / "campbell.png").exists() and (out.parent / "sweep_wing_amplitude.png").exists()
+
+
+def test_cli_reports_an_unknown_scene_key(tmp_path, capsys):
+    scene = tmp_path / "scene.toml"
+    scene.write_text("[mbs]\nspeed = 700\n")
+    parser = argparse.ArgumentParser()
+    add_sweep_parser(parser.add_subparsers())
+    args = parser.parse_args(["sweep", str(scene), "--speeds", "700"])
+    assert args.handler(args) == 2
+    assert "unknown key(s) ['speed']" in capsys.readouterr().err
