@@ -201,11 +201,10 @@ def _add_counterweights(mbs, params: ModelParams, reduced: ReducedCounterweight,
         )
         if params.solver.damping and params.modal_damping_ratio > 0:
             mbs.SetObjectParameter(created["oFFRFreducedOrder"], "dampingMatrixReduced", exu.MatrixContainer(modal_damping))
-        on_web = mbs.AddMarker(eu.MarkerBodyRigid(bodyNumber=items.half_throw_bodies[index],
-                                                  localPosition=[-throw.counterweight_radius, 0.0, 0.0]))
+        interface_on_web = exu.HT(rotation=COUNTERWEIGHT_ROTATION, translation=[-throw.counterweight_radius, 0.0, 0.0])
+        on_web = mbs.AddMarker(eu.MarkerBodyRigid(bodyNumber=items.half_throw_bodies[index], localHT=interface_on_web))
         on_cw = mbs.AddMarker(eu.MarkerNodeRigid(nodeNumber=created["nRigidBody"]))
-        joint = mbs.AddObject(eu.GenericJoint(markerNumbers=[on_web, on_cw], constrainedAxes=[1] * 6,
-                                              rotationMarker0=COUNTERWEIGHT_ROTATION))
+        joint = mbs.AddObject(eu.GenericJoint(markerNumbers=[on_web, on_cw], constrainedAxes=[1] * 6))
         items.cw_rigid_nodes.append(created["nRigidBody"])
         items.cw_modal_nodes.append(created["nGenericODE2"])
         items.cw_joints.append(joint)
@@ -349,9 +348,9 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None
     settings.timeIntegration.generalizedAlpha.spectralRadius = solver.spectral_radius
     settings.timeIntegration.newton.useModifiedNewton = True
     settings.timeIntegration.newton.relativeTolerance = solver.newton_tolerance
-    settings.solutionSettings.writeSolutionToFile = False
-    settings.solutionSettings.sensorsWritePeriod = solver.time_step
-    settings.displayStatistics = False
+    settings.solution.file.write = False
+    settings.solution.sensors.writePeriod = solver.time_step
+    settings.show.statistics = False
     started = wallclock.perf_counter()
     converged = mbs.SolveDynamic(settings)
     wall_time = wallclock.perf_counter() - started

@@ -1,0 +1,65 @@
+"""One complete multibody run: simulate, analyse (spectra, order spectrum, Campbell), write HDF5
+and PNG plots. The pipeline and the CLI call this; it returns data and paths, it prints nothing."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mbs.campbell import Campbell, campbell_diagram
+from mbs.counterweight import ReducedCounterweight, reduce_counterweight
+from mbs.excitation import excitation_orders
+from mbs.model import RunHistories, simulate
+from mbs.parameters import ModelParams
+from mbs.plots import plot_campbell, plot_spectrum, plot_time_history
+from mbs.results import write_run
+from mbs.spectra import Spectrum, amplitude_spectrum, order_spectrum
+
+
+@dataclass(frozen=True)
+class RunOutputs:
+    """Histories and analyses of one run; results_file (HDF5) and plots (name -> PNG path)."""
+
+    histories: RunHistories
+    reduced: ReducedCounterweight
+    spectra: dict[str, Spectrum]
+    campbell: Campbell
+    results_file: Path
+    plots: dict[str, Path]
+
+
+def run_model(params: ModelParams, out_dir, *, reduced: ReducedCounterweight | None = None,
+              campbell_speeds_rpm=None) -> RunOutputs:
+    """Simulate params, analyse the steady second half of the run and write run.h5 + PNGs to out_dir.
+
+    campbell_speeds_rpm: speeds of the Campbell diagram (default 0 to 1.3 x engine speed).
+    Spectra: wing torsion of both CWs (frequency axis, Hz) and its order spectrum over the last
+    whole revolutions of the second half.
+    """
+    out_dir = Path(out_dir)
+    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
+    histories = simulate(params, reduced=reduced)
+    steady = slice(len(histories.time) // 2, None)
+    torsion = histories.wing_torsion[:, steady].T
+    spectra = {"wing_torsion": amplitude_spectrum(histories.time[steady], torsion)}
+    revolution = 2.0 * np.pi / params.shaft_speed
+    steady_duration = histories.time[-1] - histories.time[len(histories.time) // 2] + params.solver.time_step
+    if steady_duration >= revolution * (1.0 - 1e-9):
+        spectra["wing_torsion_orders"] = order_spectrum(histories.time[steady], torsion, params.shaft_speed)
+    speeds = campbell_speeds_rpm if campbell_speeds_rpm is not None else np.linspace(0.0, 1.3 * params.speed_rpm, 27)
+    orders = excitation_orders(params.excitation, params.effects)
+    campbell = campbell_diagram(reduced, speeds, orders)
+    results_file = write_run(out_dir / "run.h5", params, reduced, histories, spectra, campbell)
+    plots = {
+        "time_history": plot_time_history(histories, out_dir / "wing_time_history.png"),
+        "spectrum": plot_spectrum(spectra["wing_torsion"], out_dir / "wing_spectrum.png",
+                                  title=f"wing torsion, {params.speed_rpm:g} rpm"),
+        "campbell": plot_campbell(campbell, out_dir / "campbell.png", operating_rpm=params.speed_rpm),
+    }
+    if "wing_torsion_orders" in spectra:
+        plots["order_spectrum"] = plot_spectrum(spectra["wing_torsion_orders"], out_dir / "wing_order_spectrum.png",
+                                                xlabel="engine order", title="wing torsion, order spectrum")
+    return RunOutputs(histories=histories, reduced=reduced, spectra=spectra, campbell=campbell,
+                      results_file=results_file, plots=plots)
