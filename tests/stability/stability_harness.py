@@ -166,8 +166,10 @@ class Watchdog(Observer):
 
     @property
     def energy_error(self) -> float:
-        """(W − U − D − R) relative to W: the global balance, 0 for an exact account."""
-        residual = self.external_work - self.stored - self.dissipation - self.meter.wear_release
+        """(W + S − U − D − R) relative to W: external work plus the elastic-stick source
+        against stored, dissipated and wear-released energy; 0 for an exact account."""
+        residual = (self.external_work + self.meter.stick_source - self.stored - self.dissipation
+                    - self.meter.wear_release)
         return residual / max(abs(self.external_work), 1e-300)
 
     @property
@@ -180,7 +182,7 @@ class Watchdog(Observer):
                "cutbacks_max": self.max_cutbacks_seen, "seconds": round(self.elapsed, 2)}
         if self.meter is not None:
             out.update(work_mJ=self.external_work, dissipation_mJ=self.dissipation,
-                       energy_error=self.energy_error)
+                       stick_source_mJ=self.meter.stick_source, energy_error=self.energy_error)
         return out
 
 

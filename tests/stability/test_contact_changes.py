@@ -4,8 +4,9 @@ that removes the whole overclosure so that points open during the wear phase.
 Energy balances are asserted where the time discretisation allows 0.5 %: the law integrates
 the frictional dissipation with τ at the end of the increment (backward Euler, as the
 paper's UINTER), so while the normal load changes during sliding the local dissipation is
-first-order accurate in the increment size, and the elastic stick (τ = μ·p·γ/γ_crit) is not
-a potential when p changes, which adds up to ½·μ·p·γ_crit per point and load change.
+first-order accurate in the increment size (lift-off cycle: 4.2 % at 20, 1.0 % at 100,
+0.3 % at 400 increments per cycle). The elastic stick's non-potential source is booked by
+the energy meter (``stick_source``).
 """
 
 from dataclasses import dataclass
@@ -66,10 +67,12 @@ def test_recontact_restores_the_clamping_force(lift_off):
         assert interface_forces(case, step.equilibrium)[0] == pytest.approx(preload_force, rel=1e-3)
 
 
-def test_separation_energy_balance_with_stiff_stick(record_property):
-    """γ_crit = 0.01 µm (stick nearly rigid) and 400 increments per cycle: the balance
-    closes to 0.3 %; γ_crit = 1 µm adds the non-potential elastic-stick share (~0.4 %)."""
-    case = cylinder(normal="motion", normal_value=-APPROACH, overrides={"contact.critical_slip": 1e-5})
+@pytest.mark.parametrize("critical_slip", [1e-3, 1e-5])
+def test_separation_energy_balance(critical_slip, record_property):
+    """400 increments per cycle: the balance closes to 0.3 % with the scene's γ_crit = 1 µm
+    (stick source booked) as with a nearly rigid stick (0.01 µm)."""
+    case = cylinder(normal="motion", normal_value=-APPROACH,
+                    overrides={"contact.critical_slip": critical_slip})
     watchdog = Watchdog(case, max_cutbacks=2)
     drive(case, np.vstack([preload(case), lift_off_cycle(400)]), watchdog)
     record_property("outcome", watchdog.summary())
