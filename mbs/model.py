@@ -176,7 +176,7 @@ def _add_drive(mbs, params: ModelParams, speed: float, items: _Items) -> None:
         return
     excitation = params.excitation
     flywheel = mbs.AddNode(eu.Node1D(referenceCoordinates=[0.0], initialVelocities=[speed]))
-    mbs.AddObject(eu.ObjectMass1D(nodeNumber=flywheel, physicsMass=excitation.flywheel_inertia))
+    mbs.AddObject(eu.ObjectMass1D(nodeNumber=flywheel, mass=excitation.flywheel_inertia))
     flywheel_angle = mbs.AddMarker(eu.MarkerNodeCoordinate(nodeNumber=flywheel, coordinate=0))
     mbs.AddObject(eu.CoordinateConstraint(markerNumbers=[fixed, flywheel_angle], velocityLevel=True, offset=speed))
     mbs.AddObject(eu.CoordinateSpringDamper(

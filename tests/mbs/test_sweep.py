@@ -86,3 +86,15 @@ def test_cli_reports_an_unknown_scene_key(tmp_path, capsys):
     args = parser.parse_args(["sweep", str(scene), "--speeds", "700"])
     assert args.handler(args) == 2
     assert "unknown key(s) ['speed']" in capsys.readouterr().err
+
+
+@pytest.mark.bench
+def test_default_model_resonates_where_the_gear_order_crosses_the_coupled_torsion_mode(tmp_path):
+    params = ModelParams(effects=frozenset({"gear_mesh"}), solver=SolverParams(revolutions=2.0, time_step=5e-5))
+    step = 10.0
+    result = speed_sweep(params, np.arange(460.0, 540.0 + 1, step), path=tmp_path / "sweep.h5")
+    gear = [c for c in result.crossings if c["order"] == params.excitation.gear_teeth]
+    nearest = min(gear, key=lambda c: abs(c["speed_rpm"] - result.peak_speed()))
+    print(f"\npeak {result.peak_speed():.0f} rpm, crossing {nearest['speed_rpm']:.1f} rpm at {nearest['frequency_hz']:.1f} Hz; "
+          f"amplitudes um {np.round(1e3 * result.wing_amplitude[:, 0], 3).tolist()}")
+    assert abs(result.peak_speed() - nearest["speed_rpm"]) <= step
