@@ -13,9 +13,10 @@ height) overhangs the hub on both sides: these overhangs are the "wings". In the
 "torsion" mode the wings vibrate along the crank axis (z) in opposite phase, i.e. the CW
 twists about its radial axis.
 
-Craig-Bampton (Hurty) reduction with the contact face as one rigid (RBE2) interface: the
-interface is the floating frame of the reduced body, so the mode basis holds only the
-fixed-interface normal modes and the body's reference node IS the interface.
+Craig-Bampton (Hurty) reduction with the contact face as one rigid (RBE2) interface, done by
+reduction.exudyn_bridge.floating_frame_modes: the interface is the floating frame of the reduced
+body, so the mode basis holds only the fixed-interface normal modes and the body's reference
+node IS the interface.
 
 Units: mm, N, MPa, t, s.
 """
@@ -29,8 +30,9 @@ import scipy.linalg
 import scipy.sparse as sp
 import skfem
 
-from reduction.elasticity import assemble_elastic_body
+from reduction.elasticity import ElasticBody, assemble_elastic_body
 from reduction.errors import InputError
+from reduction.exudyn_bridge import FloatingFrameModes, fem_interface, floating_frame_modes
 
 
 @dataclass(frozen=True)
@@ -84,6 +86,7 @@ class ReducedCounterweight:
     wing_tip_nodes: (2,) nodes at the -x and +x wing tips (outer face, mid-plane).
     torsion_mode: index of the wing "torsion" mode in mode_shapes.
     total_mass: t. center_of_mass: (3,) mm in the CW frame.
+    body, modes: the assembled FE body and the floating-frame modes (reduction/ objects).
     """
 
     geometry: CounterweightGeometry
@@ -97,6 +100,12 @@ class ReducedCounterweight:
     torsion_mode: int
     total_mass: float
     center_of_mass: np.ndarray
+    body: ElasticBody
+    modes: FloatingFrameModes
+
+    def fem_interface(self):
+        """exudyn FEMinterface (mesh, K, M, modes, surface) for ObjectFFRFreducedOrder."""
+        return fem_interface(self.body, self.modes)
 
     @property
     def n_modes(self) -> int:
@@ -141,14 +150,6 @@ def _nodes_near(coordinates: np.ndarray, point, tolerance: float) -> int:
     return node
 
 
-def _fixed_interface_modes(stiffness, mass, interior: np.ndarray, n_modes: int):
-    k_ii = stiffness[interior][:, interior].tocsc()
-    m_ii = mass[interior][:, interior].tocsc()
-    eigenvalues, vectors = sp.linalg.eigsh(k_ii, k=n_modes, M=m_ii, sigma=0.0, which="LM")
-    order = np.argsort(eigenvalues)
-    return eigenvalues[order], vectors[:, order]
-
-
 def _torsion_mode_index(tip_axial: np.ndarray, mode_shapes: np.ndarray) -> int:
     """Lowest mode whose wing tips move axially in opposite phase and dominate the mode.
 
@@ -184,11 +185,8 @@ def reduce_counterweight(geometry: CounterweightGeometry, n_modes: int = 6) -> R
         raise InputError("counterweight DOFs are not node-interleaved as exudyn requires")
     tolerance = 1e-6 * geometry.width
     interface_nodes = np.nonzero(np.abs(coordinates[:, 1]) < tolerance)[0]
-    interface_dofs = (3 * interface_nodes[:, None] + np.arange(3)).ravel()
-    interior = np.setdiff1d(np.arange(3 * n_nodes), interface_dofs)
-    eigenvalues, interior_vectors = _fixed_interface_modes(body.stiffness, body.mass, interior, n_modes)
-    mode_shapes = np.zeros((3 * n_nodes, n_modes))
-    mode_shapes[interior] = interior_vectors
+    modes = floating_frame_modes(body, [interface_nodes], n_modes, reference_points=[[0.0, 0.0, 0.0]])
+    mode_shapes = modes.basis
     wing_tip_nodes = np.array([
         _nodes_near(coordinates, (sign * 0.5 * geometry.width, geometry.height, 0.0), tolerance)
         for sign in (-1.0, 1.0)
@@ -206,12 +204,14 @@ def reduce_counterweight(geometry: CounterweightGeometry, n_modes: int = 6) -> R
         mode_shapes=mode_shapes,
         stiffness=body.stiffness,
         mass=body.mass,
-        eigenfrequencies=np.sqrt(np.abs(eigenvalues)) / (2.0 * np.pi),
+        eigenfrequencies=modes.fixed_interface_frequencies_hz,
         interface_nodes=interface_nodes,
         wing_tip_nodes=wing_tip_nodes,
         torsion_mode=torsion,
         total_mass=total_mass,
         center_of_mass=center_of_mass,
+        body=body,
+        modes=modes,
     )
 
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import exudyn as exu
 import exudyn.utilities as eu
 import numpy as np
-from exudyn.FEM import FEMinterface, ObjectFFRFreducedOrderInterface
+from exudyn.FEM import ObjectFFRFreducedOrderInterface
 
 from mbs.counterweight import ReducedCounterweight, reduce_counterweight
 from mbs.parameters import CrankThrowParams, ModelParams
@@ -97,16 +97,6 @@ def _half_throw_inertia(throw: CrankThrowParams, side: float) -> eu.RigidBodyIne
     pin = eu.InertiaCylinder(throw.density, 0.5 * throw.pin_length, throw.pin_radius, axis=2).Translated(
         [throw.crank_radius, 0.0, -side * 0.25 * (2.0 * throw.web_thickness + throw.pin_length)])
     return journal + web + pin
-
-
-def _fem_interface(reduced: ReducedCounterweight) -> FEMinterface:
-    fem = FEMinterface()
-    fem.nodes = {"Position": reduced.node_coordinates}
-    fem.massMatrix = reduced.mass
-    fem.stiffnessMatrix = reduced.stiffness
-    fem.modeBasis = {"matrix": reduced.mode_shapes, "type": "HCBmodes"}
-    fem.eigenValues = (2.0 * np.pi * reduced.eigenfrequencies) ** 2
-    return fem
 
 
 @dataclass
@@ -188,7 +178,7 @@ def _add_drive(mbs, params: ModelParams, speed: float, items: _Items) -> None:
 
 def _add_counterweights(mbs, params: ModelParams, reduced: ReducedCounterweight, speed: float, items: _Items) -> None:
     throw = params.throw
-    interface = ObjectFFRFreducedOrderInterface(_fem_interface(reduced))
+    interface = ObjectFFRFreducedOrderInterface(reduced.fem_interface())
     modal_damping = np.diag(2.0 * params.modal_damping_ratio * 2.0 * np.pi * reduced.eigenfrequencies)
     for index, side in enumerate((-1.0, 1.0)):
         position = np.array([-throw.counterweight_radius, 0.0, side * throw.web_center_z])
