@@ -11,11 +11,17 @@ import numpy as np
 from mbs.parameters import ExcitationParams
 
 
+def gas_torque_table(shaft_speed: float, excitation: ExcitationParams) -> list[tuple[float, float, float]]:
+    """Rows (angular frequency rad/s, amplitude N mm, phase rad) of the gas-torque order table."""
+    return [(order * shaft_speed, amplitude, phase) for order, amplitude, phase in
+            zip(excitation.gas_orders, excitation.gas_torque_amplitudes, excitation.gas_torque_phases)]
+
+
 def gas_torque(time, shaft_speed: float, excitation: ExcitationParams):
     """Fluctuating gas torque of one cylinder, sum_k T_k cos(order_k * angle + phase_k), N mm."""
-    angle = np.multiply.outer(np.asarray(time, dtype=float), np.asarray(excitation.gas_orders)) * shaft_speed
-    terms = np.asarray(excitation.gas_torque_amplitudes) * np.cos(angle + np.asarray(excitation.gas_torque_phases))
-    return terms.sum(axis=-1)
+    table = np.asarray(gas_torque_table(shaft_speed, excitation))
+    angle = np.multiply.outer(np.asarray(time, dtype=float), table[:, 0])
+    return (table[:, 1] * np.cos(angle + table[:, 2])).sum(axis=-1)
 
 
 def gear_mesh_torque(time, shaft_speed: float, excitation: ExcitationParams):

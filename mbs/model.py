@@ -29,6 +29,7 @@ import numpy as np
 from exudyn.FEM import ObjectFFRFreducedOrderInterface
 
 from mbs.counterweight import ReducedCounterweight, reduce_counterweight
+from mbs.excitation import gas_torque_table
 from mbs.parameters import CrankThrowParams, ModelParams
 
 #: CW local frame -> crank frame: CW y (radial outward) = -x crank, CW x = y crank, z = z.
@@ -206,8 +207,7 @@ def _add_loads(mbs, params: ModelParams, speed: float, items: _Items) -> None:
     excitation = params.excitation
     radius = params.throw.crank_radius
     if "gas_torque" in params.effects:
-        table = [(order * speed, 0.5 * amplitude / radius, phase) for order, amplitude, phase in
-                 zip(excitation.gas_orders, excitation.gas_torque_amplitudes, excitation.gas_torque_phases)]
+        table = [(w, 0.5 * amplitude / radius, phase) for w, amplitude, phase in gas_torque_table(speed, excitation)]
 
         def tangential_half_force(mbs_, t, load_vector):
             return [0.0, sum(a * math.cos(w * t + p) for w, a, p in table), 0.0]
