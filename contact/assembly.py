@@ -183,7 +183,7 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
                 labels[f"{item.body.name}.{ref_name}.{comp}"] = int(dof)
 
     def pattern_vectors(spec, kind):
-        vectors = {}
+        vectors, named = {}, set()
         for pattern, entries in (spec or {}).items():
             vector = np.zeros(n)
             for body_name, ref_name, comp, value in entries:
@@ -192,10 +192,11 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
                     raise InputError(f"{kind} {pattern!r}: no control DOF {label!r} "
                                      f"(available: {', '.join(labels) or 'none'})")
                 vector[labels[label]] += value
+                named.add(labels[label])
             vectors[pattern] = vector
-        return vectors
+        return vectors, named
 
-    load_vectors = pattern_vectors(loads, "load")
+    load_vectors, _ = pattern_vectors(loads, "load")
     bolt_set = None
     if bolts:
         vectors = np.array([bolt_vector(bolt, labels, n) for bolt in bolts])
@@ -203,9 +204,9 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
         for name, bolt, vector in zip(names, bolts, vectors):
             load_vectors[name] = pretension_pattern(bolt, vector)
         bolt_set = BoltSet(tuple(bolts), vectors, names)
-    motion_vectors = pattern_vectors(motions, "motion")
-    prescribed = np.unique(np.concatenate(
-        [np.flatnonzero(v) for v in motion_vectors.values()] or [np.zeros(0, dtype=int)])).astype(int)
+    # Every DOF a motion names is prescribed, also with value 0 (a DOF held in place).
+    motion_vectors, moved = pattern_vectors(motions, "motion")
+    prescribed = np.array(sorted(moved), dtype=int)
     for pattern, vector in load_vectors.items():
         if np.any(vector[prescribed]):
             raise InputError(f"load {pattern!r} acts on a DOF whose motion is prescribed")

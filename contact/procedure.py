@@ -76,6 +76,7 @@ class CycleSummary:
     shear: np.ndarray
     cof: np.ndarray
     max_utilised_cof: np.ndarray
+    max_shear: np.ndarray
     status: np.ndarray
     slip_range: np.ndarray
     dissipation_in_cycle: np.ndarray
@@ -241,13 +242,15 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
             low, high = start_slip.copy(), start_slip.copy()
             start_dissipation = state.dissipation.copy()
             max_util = np.zeros(solver.n_points)
+            max_shear = np.zeros(solver.n_points)
             worst = np.zeros(solver.n_points, dtype=np.int8)
             ever_closed = np.zeros(solver.n_points, dtype=bool)
             for k in range(1, n_inc + 1):
                 status = step(program.cycle(k / n_inc), effects, phase, cycle_number,
                               cycle_number - 1 + k / n_inc)
-                response_util = _utilisation(equilibrium, solver)
-                max_util = np.maximum(max_util, response_util)
+                utilisation, shear_now = _utilisation(equilibrium, solver)
+                max_util = np.maximum(max_util, utilisation)
+                max_shear = np.maximum(max_shear, shear_now)
                 worst = np.maximum(worst, status)
                 ever_closed |= status != Status.OPEN
                 low = np.minimum(low, state.slip_vector)
@@ -258,7 +261,7 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
             summary = CycleSummary(
                 cycle=cycle_number, phase=phase, equivalent_cycles=equivalent,
                 pressure=per_point[:, 0], shear=per_point[:, 1:], cof=state.cof.copy(),
-                max_utilised_cof=max_util, status=cycle_status,
+                max_utilised_cof=max_util, max_shear=max_shear, status=cycle_status,
                 slip_range=np.linalg.norm(high - low, axis=1),
                 dissipation_in_cycle=state.dissipation - start_dissipation, state=state,
                 clamp_force=None if bolts is None else float(bolt_forces(equilibrium).sum()))
@@ -292,11 +295,13 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
     return RunResult(verdict, stationary, figures, state, equilibrium, history)
 
 
-def _utilisation(equilibrium: Equilibrium, solver: ContactSolver) -> np.ndarray:
+def _utilisation(equilibrium: Equilibrium, solver: ContactSolver) -> tuple[np.ndarray, np.ndarray]:
+    """Utilised COF |τ|/p and shear traction |τ| (MPa) of every point."""
     per_point = equilibrium.forces.reshape(solver.n_points, -1)
     normal = per_point[:, 0]
     shear = np.linalg.norm(per_point[:, 1:], axis=1)
-    return np.divide(shear, normal, out=np.zeros_like(shear), where=normal > 0.0)
+    return (np.divide(shear, normal, out=np.zeros_like(shear), where=normal > 0.0),
+            shear / solver.area)
 
 
 __all__ = ["LoadProgram", "Procedure", "run", "Observer", "CycleSummary", "IncrementRecord",

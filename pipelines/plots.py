@@ -42,6 +42,27 @@ def _plane_axes(coordinates: np.ndarray) -> tuple[int, int]:
     return int(min(first, second)), int(max(first, second))
 
 
+def _path_plot(coordinates, final, names, a, b, title, out_dir) -> Path:
+    """Fields along the line through the middle of the interface (the paper's Figs. 9 and 12)."""
+    middle = 0.5 * (coordinates[:, b].min() + coordinates[:, b].max())
+    line_value = coordinates[np.argmin(np.abs(coordinates[:, b] - middle)), b]
+    on_line = np.abs(coordinates[:, b] - line_value) < 1e-6 * np.ptp(coordinates[:, a])
+    order = np.flatnonzero(on_line)[np.argsort(coordinates[on_line, a])]
+    shown = [n for n in ("pressure", "slip_range", "cof", "wear_depth") if n in names]
+    fig, axes = plt.subplots(len(shown), 1, figsize=(7, 1.9 * len(shown)), sharex=True)
+    for ax, name in zip(np.atleast_1d(axes), shown):
+        ax.plot(coordinates[order, a], _field(final, name)[order], "o-", ms=2.5, lw=1.2)
+        ax.set_ylabel(FIELD_LABELS[name], fontsize=7)
+        ax.grid(alpha=0.3)
+    np.atleast_1d(axes)[-1].set_xlabel(f"{'xyz'[a]} along {'xyz'[b]} = {line_value:g} mm [mm]")
+    fig.suptitle(f"{title}: fields along the path through the middle")
+    fig.tight_layout()
+    target = out_dir / "path.png"
+    fig.savefig(target, dpi=130)
+    plt.close(fig)
+    return target
+
+
 def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
     """Draw the standard figures of one results file; returns the PNG paths."""
     out_dir = Path(out_dir)
@@ -75,6 +96,7 @@ def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
             written.append(target)
         else:
             a, b = _plane_axes(coordinates)
+            written.append(_path_plot(coordinates, final, names, a, b, title, out_dir))
             for name in names:
                 fig, ax = plt.subplots(figsize=(6, 4.5))
                 value = _field(final, name)

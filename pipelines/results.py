@@ -5,12 +5,14 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
     /                      attrs: fretwork_format="fretwork-results", format_version,
                            scene_name, scene_toml, complete (False until the run ends)
     /points/               coordinates (n, dim) mm, area (n,) mm² (mm in 2D), normal (n, dim),
-                           initial_overclosure (n,) mm
+                           initial_overclosure (n,) mm, facets (m, k) point indices of the
+                           contact surface's facets (lines in 2D, quads/triangles in 3D)
     /increments/           one row per converged increment: time (cycles), cycle, phase
                            (0 preload, 1 cof, 2 wear), iterations, cutbacks,
                            external_work, stored_energy, dissipation (mJ), bolt_forces
                            (rows, n_bolts) N with the bolt names in its ``bolts`` attribute,
-                           control/<dof>/displacement (mm) and control/<dof>/force (N)
+                           control/displacement and control/force (rows, n_dofs) mm and N,
+                           the DOF labels in the ``dofs`` attribute of /increments/control
     /cycles/               one row per recorded cycle: cycle, phase, equivalent_cycles and one
                            dataset per global figure (figures/<name>); fields/<name> (rows, n[, k])
     /final/                the final per-point fields
@@ -35,24 +37,35 @@ from contact.procedure import PHASES, CycleSummary, IncrementRecord, Observer
 FORMAT = "fretwork-results"
 FORMAT_VERSION = 1
 FIELD_UNITS = {
-    "pressure": "MPa", "shear": "MPa", "cof": "1", "max_utilised_cof": "1", "status": "code",
+    "pressure": "MPa", "shear": "MPa", "cof": "1", "max_utilised_cof": "1", "max_shear": "MPa",
+    "status": "code",
     "slip_range": "mm", "dissipation_in_cycle": "mJ/mm^2", "wear_depth": "mm",
     "accumulated_slip": "mm", "dissipation": "mJ/mm^2",
 }
 STATUS_NAMES = "0 open, 1 stick, 2 slip, 3 slip at cof_max"
 
 
-def _append(group: h5py.Group, name: str, row, units: str) -> None:
-    row = np.asarray(row, dtype=float if np.asarray(row).dtype.kind in "fc" else np.asarray(row).dtype)
+def _append_rows(group: h5py.Group, name: str, rows, units: str) -> None:
+    """Append a block of rows (k, ...) to a resizable dataset, creating it on first use."""
+    rows = np.asarray(rows)
+    if rows.dtype.kind not in "fciu":
+        rows = rows.astype(float)
     if name not in group:
-        group.create_dataset(name, data=row[None], maxshape=(None,) + row.shape,
-                             chunks=(64,) + row.shape if row.size < 4096 else (1,) + row.shape,
-                             compression="gzip" if row.size > 64 else None)
+        shape = rows.shape[1:]
+        size = int(np.prod(shape)) if shape else 1
+        group.create_dataset(name, data=rows, maxshape=(None,) + shape,
+                             chunks=(max(1, min(256, 65536 // size)),) + shape,
+                             compression="gzip" if size > 64 else None)
         group[name].attrs["units"] = units
     else:
         dataset = group[name]
-        dataset.resize(dataset.shape[0] + 1, axis=0)
-        dataset[-1] = row
+        start = dataset.shape[0]
+        dataset.resize(start + rows.shape[0], axis=0)
+        dataset[start:] = rows
+
+
+def _append(group: h5py.Group, name: str, row, units: str) -> None:
+    _append_rows(group, name, np.asarray(row)[None], units)
 
 
 class ResultsWriter(Observer):
@@ -77,41 +90,54 @@ class ResultsWriter(Observer):
         for name, data, units in (("coordinates", pairing.slave.coordinates, "mm"),
                                   ("area", pairing.area, "mm^2 (mm per unit thickness in 2D)"),
                                   ("normal", pairing.normal, "1"),
-                                  ("initial_overclosure", pairing.initial_overclosure, "mm")):
+                                  ("initial_overclosure", pairing.initial_overclosure, "mm"),
+                                  ("facets", pairing.slave.facets, "index")):
             points.create_dataset(name, data=data).attrs["units"] = units
         root.create_group("increments")
         root.create_group("cycles")
+        self._rows: dict[str, list] = {}
+        self._units: dict[str, str] = {}
 
     def phase(self, name, n_cycles):
         if self.progress is not None:
             self.progress.phase(name, n_cycles)
 
-    def increment(self, record: IncrementRecord) -> None:
+    def _row(self, name: str, value, units: str) -> None:
+        self._rows.setdefault(name, []).append(value)
+        self._units[name] = units
+
+    def _flush_increments(self) -> None:
         group = self.file["increments"]
-        _append(group, "time", record.time, "cycles")
-        _append(group, "cycle", record.cycle, "1")
-        _append(group, "phase", PHASES.index(record.phase), "0 preload, 1 cof, 2 wear")
-        _append(group, "iterations", record.iterations, "1")
-        _append(group, "cutbacks", record.cutbacks, "1")
+        for name, rows in self._rows.items():
+            _append_rows(group, name, np.array(rows), self._units[name])
+        if "bolt_forces" in group:
+            group["bolt_forces"].attrs["bolts"] = ",".join(self.model.assembly.structure.bolts.names)
+        self._rows = {}
+
+    def increment(self, record: IncrementRecord) -> None:
+        self._row("time", record.time, "cycles")
+        self._row("cycle", record.cycle, "1")
+        self._row("phase", PHASES.index(record.phase), "0 preload, 1 cof, 2 wear")
+        self._row("iterations", record.iterations, "1")
+        self._row("cutbacks", record.cutbacks, "1")
         area = self.model.assembly.structure.area
-        _append(group, "dissipation", float(np.sum(record.state.dissipation * area)), "mJ")
+        self._row("dissipation", float(np.sum(record.state.dissipation * area)), "mJ")
         if self.meter is not None:
             work, stored = self.meter.update(record.equilibrium, record.state)
-            _append(group, "external_work", work, "mJ")
-            _append(group, "stored_energy", stored, "mJ")
-            _append(group, "wear_release", self.meter.wear_release, "mJ")
-            displacement = self.meter._displacement
-            forces = self.meter._forces
-            for label, dof in self.labels.items():
-                _append(group, f"control/{label}/displacement", displacement[dof], "mm")
-                _append(group, f"control/{label}/force", forces[dof], "N")
+            self._row("external_work", work, "mJ")
+            self._row("stored_energy", stored, "mJ")
+            self._row("wear_release", self.meter.wear_release, "mJ")
+            displacement, forces = self.meter._displacement, self.meter._forces
+            dofs = np.fromiter(self.labels.values(), dtype=int)
+            self._row("control/displacement", displacement[dofs], "mm")
+            self._row("control/force", forces[dofs], "N")
         if record.bolt_forces is not None:
-            _append(group, "bolt_forces", record.bolt_forces, "N")
-            group["bolt_forces"].attrs["bolts"] = ",".join(self.model.assembly.structure.bolts.names)
+            self._row("bolt_forces", record.bolt_forces, "N")
         if self.progress is not None:
             self.progress.increment(record)
 
     def cycle(self, summary: CycleSummary) -> None:
+        self._flush_increments()
         group = self.file["cycles"]
         recorded = summary.cycle % self.record_every == 0 or summary.cycle == 1
         _append(group, "cycle", summary.cycle, "1")
@@ -132,7 +158,8 @@ class ResultsWriter(Observer):
         state = summary.state
         fields = {
             "pressure": summary.pressure, "shear": summary.shear, "cof": summary.cof,
-            "max_utilised_cof": summary.max_utilised_cof, "status": summary.status,
+            "max_utilised_cof": summary.max_utilised_cof, "max_shear": summary.max_shear,
+            "status": summary.status,
             "slip_range": summary.slip_range, "dissipation_in_cycle": summary.dissipation_in_cycle,
             "accumulated_slip": state.accumulated_slip, "dissipation": state.dissipation,
         }
@@ -142,6 +169,9 @@ class ResultsWriter(Observer):
 
     def finish(self, result) -> Path:
         """Write the final fields and the summary, close, and move the file into place."""
+        self._flush_increments()
+        if "control/displacement" in self.file["increments"]:
+            self.file["increments/control"].attrs["dofs"] = ",".join(self.labels)
         final = self.file.create_group("final")
         last = result.cycles[-1]
         for name, value in self._fields(last).items():

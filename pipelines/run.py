@@ -12,6 +12,7 @@ from contact import procedure
 from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from pipelines.build import Model, build
+from pipelines.paraview import write_final_vtu, write_interface_series
 from pipelines.plots import plot_results
 from pipelines.results import ResultsWriter
 from pipelines.scene import Scene
@@ -77,6 +78,8 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     stage_times["procedure_s"] = time.perf_counter() - clock
     path = writer.finish(result)
     written = plot_results(path, out_dir / "plots") if plots else []
+    write_interface_series(path, out_dir / "interface.xdmf")
+    write_final_vtu(path, out_dir / "interface_final.vtu")
     summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
                **result.figures}
     return Outcome(summary, path, written, stage_times)

@@ -3,6 +3,7 @@
 import json
 
 import h5py
+import meshio
 import numpy as np
 
 from pipelines.cli import main
@@ -12,7 +13,7 @@ FIGURES = {"verdict", "stick_area_fraction", "slip_area_fraction", "damaged_area
            "min_stick_margin", "cycles_run", "wall_time_s"}
 
 
-def test_run_prints_json_figures_and_writes_results(coarse_cylinder, tmp_path, capsys):
+def test_run_prints_json_figures_and_writes_results(coarse_cylinder, tmp_path, capsys, monkeypatch):
     out = tmp_path / "out"
     assert main(["run", str(coarse_cylinder), "--out", str(out), "--json", "--quiet"]) == 0
     summary = json.loads(capsys.readouterr().out)
@@ -26,6 +27,13 @@ def test_run_prints_json_figures_and_writes_results(coarse_cylinder, tmp_path, c
         assert np.isclose(np.sum(wear.sum(axis=0) * area), summary["wear_volume_mm3"])
         assert file["final/pressure"].attrs["units"] == "MPa"
     assert (out / "plots" / "fields.png").stat().st_size > 10_000
+    monkeypatch.chdir(out)  # meshio's reader resolves the XDMF's heavy-data file from the cwd
+    with meshio.xdmf.TimeSeriesReader("interface.xdmf") as reader:
+        points, cells = reader.read_points_cells()
+        assert len(points) == len(area) and cells[0].type == "line"
+        assert reader.num_steps == 2
+        _, point_data, _ = reader.read_data(reader.num_steps - 1)
+        assert np.allclose(point_data["wear_depth_total"], wear.sum(axis=0))
 
 
 def test_bad_scene_exits_2_with_message_and_writes_nothing(coarse_cylinder, tmp_path, capsys):
