@@ -138,7 +138,7 @@ def test_force_control_past_the_limit_reports_lost_equilibrium_2d(overload, reco
     case = cylinder(tangential="force", tangential_value=COF * LINE_LOAD)
     rows = np.vstack([preload(case), case.amplitudes(normal=1, tangential=0.9),
                       case.amplitudes(normal=1, tangential=overload)])
-    watchdog, message = _assert_clear_failure(case, rows, limit_seconds=10.0)
+    watchdog, message = _assert_clear_failure(case, rows, limit_seconds=60.0)
     record_property("outcome", {**watchdog.summary(), "message": message})
     # Every increment before the overload converged and was checked.
     assert watchdog.increments == 11
@@ -149,6 +149,6 @@ def test_force_control_past_the_limit_reports_lost_equilibrium_3d(record_propert
     case = flat(4, tangential="force", cof0=0.2)
     force = 100.0 * 10.0 * 10.0
     rows = np.array([[force, 0.0], [force, 0.15 * force], [force, 0.25 * force]])
-    watchdog, message = _assert_clear_failure(case, rows, limit_seconds=10.0)
+    watchdog, message = _assert_clear_failure(case, rows, limit_seconds=60.0)
     record_property("outcome", {**watchdog.summary(), "message": message})
     assert watchdog.increments == 2
