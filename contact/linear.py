@@ -21,6 +21,7 @@ the converged equilibrium is set by the solver's residual test, not by this modu
 
 from __future__ import annotations
 
+import time
 import weakref
 from dataclasses import dataclass
 
@@ -48,8 +49,10 @@ class KrylovSettings:
 
     direct_below: closed rows below which the closed block is factorised every iteration.
     relative_tolerance: GMRES stops at ‖J·x − b‖ ≤ this × ‖b‖ (rows in mm).
-    refresh_after: rebuild the preconditioner for the next solve when GMRES needed more
-        iterations than this.
+    fresh_iterations: Krylov iterations a solve needs with a fresh preconditioner. Every
+        iteration beyond it is time lost to an aged one; once that lost time exceeds what the
+        last rebuild took, the preconditioner is rebuilt for the next solve (pay for a
+        rebuild only after having wasted as much: never worse than twice the best policy).
     max_iterations: Krylov space size; if GMRES has not converged by then, the
         preconditioner is rebuilt from the current tangent and the solve repeated.
     single_precision: factorise the preconditioner and multiply by W in float32 inside
@@ -59,7 +62,7 @@ class KrylovSettings:
 
     direct_below: int = 300
     relative_tolerance: float = 1e-4
-    refresh_after: int = 20
+    fresh_iterations: int = 2
     max_iterations: int = 40
     single_precision: bool = True
 
@@ -87,6 +90,8 @@ class NewtonLinearSolver:
         self._W_closed_rows: np.ndarray | None = None
         self._factor = None
         self._stale = True
+        self._rebuild_time = 0.0
+        self._lost_time = 0.0
 
     def solve(self, blocks: np.ndarray, r_kin: np.ndarray, r_ctl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Newton correction (Δg mm, Δq mm) for residuals r_kin (mm) and r_ctl (N)."""
@@ -123,20 +128,25 @@ class NewtonLinearSolver:
             top = x_c + W_cc @ tangent_x.astype(W_cc.dtype) + E_c @ x_q
             return np.concatenate([top, self._control_scale * (space.Sq @ x_q - E_c.T @ tangent_x)])
 
+        def krylov():
+            rhs = np.concatenate([-r_kin[closed], -self._control_scale * r_ctl])
+            return _gmres(matvec, self._precondition, rhs, self.settings.relative_tolerance,
+                          self.settings.max_iterations)
+
         if refactor:
             self._refactor(working, closed_blocks, W_cc, E_c)
-        rhs = np.concatenate([-r_kin[closed], -self._control_scale * r_ctl])
-        solution, iterations = _gmres(matvec, self._precondition, rhs,
-                                      self.settings.relative_tolerance, self.settings.max_iterations)
+        started = time.perf_counter()
+        solution, iterations = krylov()
+        if solution is not None and iterations > self.settings.fresh_iterations:
+            per_iteration = (time.perf_counter() - started) / iterations
+            self._lost_time += (iterations - self.settings.fresh_iterations) * per_iteration
         if solution is None:
             self._refactor(working, closed_blocks, W_cc, E_c)
-            rhs = np.concatenate([-r_kin[closed], -self._control_scale * r_ctl])
-            solution, more = _gmres(matvec, self._precondition, rhs,
-                                    self.settings.relative_tolerance, self.settings.max_iterations)
+            solution, more = krylov()
             iterations += more
             if solution is None:
                 raise np.linalg.LinAlgError("GMRES did not converge with a fresh preconditioner")
-        self._stale = iterations > self.settings.refresh_after
+        self._stale = self._lost_time > self._rebuild_time
         self.counters.solves += 1
         self.counters.krylov_iterations += iterations
         delta_q = solution[closed.size:]
@@ -163,6 +173,7 @@ class NewtonLinearSolver:
 
     def _refactor(self, closed_points, closed_blocks, W_cc, E_c) -> None:
         """Dense LU of the bordered closed Jacobian, scaled control rows, built in Fortran order."""
+        started = time.perf_counter()
         dtype = np.float32 if self.settings.single_precision else np.float64
         n_c, m = W_cc.shape[0], self.space.n_control
         dim = closed_blocks.shape[1]
@@ -189,6 +200,8 @@ class NewtonLinearSolver:
         self._factor = la.lu_factor(matrix, overwrite_a=True, check_finite=False)
         self._closed_key = closed_points
         self._stale = False
+        self._rebuild_time = time.perf_counter() - started
+        self._lost_time = 0.0
         self.counters.factorisations += 1
 
     def _precondition(self, vector: np.ndarray) -> np.ndarray:
