@@ -14,7 +14,7 @@ speeds in rpm.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
@@ -28,14 +28,19 @@ _PLANE = np.diag([1.0, 1.0, 0.0])
 
 @dataclass(frozen=True)
 class Campbell:
-    """speeds_rpm (n_s,); frequencies (n_s, n_modes) Hz sorted per speed; orders (n_o,) engine
-    orders drawn as lines f = order * rpm / 60; crossings: list of dicts with keys order, mode,
-    speed_rpm, frequency_hz where an order line meets a mode line."""
+    """speeds_rpm (n_s,); frequencies (n_s, n_modes) Hz of the reduced CW sorted per speed;
+    orders (n_o,) engine orders drawn as lines f = order * rpm / 60; crossings: list of dicts
+    with keys order, mode, speed_rpm, frequency_hz where an order line meets a CW mode line.
+    system_frequencies (n_s, k) Hz: eigenfrequencies of the coupled multibody model (crank throw
+    + both CWs) or None; system_crossings: the order crossings of those modes, where a run
+    resonates."""
 
     speeds_rpm: np.ndarray
     frequencies: np.ndarray
     orders: np.ndarray
     crossings: list
+    system_frequencies: np.ndarray | None = None
+    system_crossings: list = field(default_factory=list)
 
 
 def _spin_matrices(reduced: ReducedCounterweight) -> tuple[np.ndarray, np.ndarray]:
@@ -84,9 +89,16 @@ def order_crossings(speeds_rpm, frequencies, orders) -> list:
     return sorted(crossings, key=lambda c: c["speed_rpm"])
 
 
-def campbell_diagram(reduced: ReducedCounterweight, speeds_rpm, orders) -> Campbell:
-    """Reduced-CW eigenfrequencies over speeds_rpm with the engine-order lines and crossings."""
+def campbell_diagram(reduced: ReducedCounterweight, speeds_rpm, orders, system_frequencies=None) -> Campbell:
+    """Reduced-CW eigenfrequencies over speeds_rpm with the engine-order lines and crossings.
+
+    system_frequencies: optional (n_s, k) coupled-model eigenfrequencies at the same speeds
+    (mbs.model.system_eigenfrequencies), whose order crossings are added as system_crossings.
+    """
     speeds = np.asarray(speeds_rpm, dtype=float)
     frequencies = rotating_eigenfrequencies(reduced, speeds)
+    system = None if system_frequencies is None else np.asarray(system_frequencies, dtype=float)
     return Campbell(speeds_rpm=speeds, frequencies=frequencies, orders=np.asarray(orders, dtype=float),
-                    crossings=order_crossings(speeds, frequencies, orders))
+                    crossings=order_crossings(speeds, frequencies, orders),
+                    system_frequencies=system,
+                    system_crossings=[] if system is None else order_crossings(speeds, system, orders))

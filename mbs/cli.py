@@ -65,8 +65,7 @@ def run_sweep(args) -> int:
     plots = Path(args.plots) if args.plots else Path(args.out).parent
     crossing_speeds = [c["speed_rpm"] for c in result.crossings]
     plot_sweep(result.speeds_rpm, result.wing_amplitude, plots / "sweep_wing_amplitude.png", crossings_rpm=crossing_speeds)
-    plot_campbell(result.campbell, plots / "campbell.png", system_frequencies=result.system_frequencies,
-                  crossings=result.crossings)
+    plot_campbell(result.campbell, plots / "campbell.png")
     if args.json:
         summary = result.to_json()
         summary["file"] = str(args.out)

@@ -52,27 +52,25 @@ def plot_spectrum(spectrum: Spectrum, path, *, xlabel: str = "frequency (Hz)", t
     return _save(figure, path)
 
 
-def plot_campbell(campbell: Campbell, path, *, operating_rpm: float | None = None,
-                  system_frequencies=None, crossings=None) -> Path:
-    """Mode lines and engine-order lines over speed, crossings marked.
-
-    system_frequencies: optional (n_speeds, k) coupled-model eigenfrequencies (Hz) drawn in grey;
-    crossings: the crossings to mark (default: those of the reduced-CW diagram).
-    """
+def plot_campbell(campbell: Campbell, path, *, operating_rpm: float | None = None) -> Path:
+    """Mode lines (reduced CW black, coupled model grey) and engine-order lines over speed;
+    crossings with the coupled-model modes marked red, with the CW modes as open circles."""
     figure, ax = plt.subplots(figsize=(7, 5))
     for mode in range(campbell.frequencies.shape[1]):
         ax.plot(campbell.speeds_rpm, campbell.frequencies[:, mode], "k-", lw=1.2,
                 label="reduced CW (interface held)" if mode == 0 else None)
     f_max = 1.15 * campbell.frequencies.max()
-    if system_frequencies is not None:
-        system = np.asarray(system_frequencies)
+    if campbell.system_frequencies is not None:
+        system = campbell.system_frequencies
         for mode in range(system.shape[1]):
             ax.plot(campbell.speeds_rpm, system[:, mode], "-", color="0.6", lw=0.8,
                     label="coupled multibody model" if mode == 0 else None)
     for order in campbell.orders:
         ax.plot(campbell.speeds_rpm, order * campbell.speeds_rpm / 60.0, "--", lw=0.7, label=f"order {order:g}")
-    for crossing in campbell.crossings if crossings is None else crossings:
-        ax.plot(crossing["speed_rpm"], crossing["frequency_hz"], "ro", ms=5)
+    for crossing in campbell.crossings:
+        ax.plot(crossing["speed_rpm"], crossing["frequency_hz"], "ko", ms=6, mfc="none")
+    for crossing in campbell.system_crossings:
+        ax.plot(crossing["speed_rpm"], crossing["frequency_hz"], "ro", ms=4)
     if operating_rpm is not None:
         ax.axvline(operating_rpm, color="gray", lw=0.8)
     ax.set_ylim(0.0, f_max)

@@ -136,6 +136,10 @@ def write_campbell(group, campbell: Campbell) -> None:
     _signal(group, "frequency", campbell.frequencies, "Hz", "Reduced-CW eigenfrequencies per speed (rotating frame).")
     _signal(group, "orders", campbell.orders, "order", "Engine orders drawn as lines f = order * rpm / 60.")
     group.attrs["crossings_json"] = json.dumps(campbell.crossings)
+    if campbell.system_frequencies is not None:
+        _signal(group, "system_frequency", campbell.system_frequencies, "Hz",
+                "Coupled multibody model eigenfrequencies per speed (undamped, no gyroscopic terms).")
+        group.attrs["system_crossings_json"] = json.dumps(campbell.system_crossings)
 
 
 def read_histories(path) -> dict[str, np.ndarray]:

@@ -3,7 +3,7 @@ and PNG plots. The pipeline and the CLI call this; it returns data and paths, it
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -11,11 +11,12 @@ import numpy as np
 from mbs.campbell import Campbell, campbell_diagram
 from mbs.counterweight import ReducedCounterweight, reduce_counterweight
 from mbs.excitation import excitation_orders
-from mbs.model import RunHistories, simulate
+from mbs.model import RunHistories, simulate, system_eigenfrequencies
 from mbs.parameters import ModelParams
 from mbs.plots import plot_campbell, plot_spectrum, plot_time_history
 from mbs.results import write_run
 from mbs.spectra import Spectrum, amplitude_spectrum, order_spectrum
+from mbs.sweep import N_SYSTEM_MODES
 
 
 @dataclass(frozen=True)
@@ -34,7 +35,8 @@ def run_model(params: ModelParams, out_dir, *, reduced: ReducedCounterweight | N
               campbell_speeds_rpm=None) -> RunOutputs:
     """Simulate params, analyse the steady second half of the run and write run.h5 + PNGs to out_dir.
 
-    campbell_speeds_rpm: speeds of the Campbell diagram (default 0 to 1.3 x engine speed).
+    campbell_speeds_rpm: speeds of the Campbell diagram (default 0.1 to 1.3 x engine speed); the
+    diagram carries the reduced-CW modes and the coupled-model modes (one eigen-analysis per speed).
     Spectra: wing torsion of both CWs (frequency axis, Hz) and its order spectrum over the last
     whole revolutions of the second half.
     """
@@ -48,9 +50,12 @@ def run_model(params: ModelParams, out_dir, *, reduced: ReducedCounterweight | N
     steady_duration = histories.time[-1] - histories.time[len(histories.time) // 2] + params.solver.time_step
     if steady_duration >= revolution * (1.0 - 1e-9):
         spectra["wing_torsion_orders"] = order_spectrum(histories.time[steady], torsion, params.shaft_speed)
-    speeds = campbell_speeds_rpm if campbell_speeds_rpm is not None else np.linspace(0.0, 1.3 * params.speed_rpm, 27)
+    speeds = campbell_speeds_rpm if campbell_speeds_rpm is not None else np.linspace(0.1, 1.3, 14) * params.speed_rpm
     orders = excitation_orders(params.excitation, params.effects)
-    campbell = campbell_diagram(reduced, speeds, orders)
+    system = [system_eigenfrequencies(replace(params, speed_rpm=float(s)), reduced, max_frequency=np.inf)[:N_SYSTEM_MODES]
+              for s in speeds]
+    n_common = min(len(f) for f in system)
+    campbell = campbell_diagram(reduced, speeds, orders, system_frequencies=np.array([f[:n_common] for f in system]))
     results_file = write_run(out_dir / "run.h5", params, reduced, histories, spectra, campbell)
     plots = {
         "time_history": plot_time_history(histories, out_dir / "wing_time_history.png"),

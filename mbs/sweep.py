@@ -18,7 +18,7 @@ import exudyn as exu
 import h5py
 import numpy as np
 
-from mbs.campbell import Campbell, campbell_diagram, order_crossings
+from mbs.campbell import Campbell, campbell_diagram
 from mbs.counterweight import reduce_counterweight
 from mbs.excitation import excitation_orders
 from mbs.model import SimulationError, simulate, system_eigenfrequencies
@@ -40,7 +40,7 @@ class SweepResult:
     real_time_factor (n,); system_frequencies (n, N_SYSTEM_MODES) Hz: coupled model eigenfrequencies;
     crossings: engine-order lines meeting system modes (dicts: order, mode, speed_rpm,
     frequency_hz); resonance: (n,) True where a crossing lies within half a sweep step;
-    failures: {speed_rpm: message}; campbell: the reduced-CW Campbell diagram.
+    failures: {speed_rpm: message}; campbell: the Campbell diagram (reduced CW and system).
     """
 
     speeds_rpm: np.ndarray
@@ -131,13 +131,14 @@ def speed_sweep(model_params: ModelParams, speeds, *, path=None,
         if progress is not None:
             progress(float(speed), message)
     active_orders = excitation_orders(model_params.excitation, model_params.effects)
-    crossings = order_crossings(speeds, system, active_orders) if n > 1 else []
+    campbell = campbell_diagram(reduced, speeds, active_orders, system_frequencies=system)
+    crossings = campbell.system_crossings if n > 1 else []
     half_step = 0.5 * np.min(np.diff(speeds)) if n > 1 else 0.0
     resonance = np.array([any(abs(c["speed_rpm"] - s) <= half_step for c in crossings) for s in speeds])
     result = SweepResult(
         speeds_rpm=speeds, wing_amplitude=amplitude, dominant_frequencies=frequencies, dominant_orders=orders,
         real_time_factor=real_time, system_frequencies=system, crossings=crossings, resonance=resonance,
-        failures=failures, campbell=campbell_diagram(reduced, speeds, active_orders),
+        failures=failures, campbell=campbell,
     )
     if path is not None:
         write_sweep(path, result)
