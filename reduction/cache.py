@@ -177,3 +177,18 @@ def load_condensation(cache_dir, key: str, stiffness=None, *, solver: str = "aut
         n_dofs=n_dofs, solver=solver_name, interior_load_response=responses,
         interior_retained_coupling=coupling, solve_interior=solve,
     )
+
+
+def cached_condensation(cache_dir, key: str, stiffness, compute: Callable[[], Condensation],
+                        *, solver: str = "auto") -> tuple[Condensation, bool]:
+    """The cached condensation for ``key`` (and True), or ``compute()`` stored now (and False).
+
+    stiffness: the full matrix (N/mm) the condensation came from, kept for ``expand``. Put the
+    load vectors into the key (``reduction_key(..., extra={...})``) when they may change.
+    """
+    found = load_condensation(cache_dir, key, stiffness, solver=solver)
+    if found is not None:
+        return found, True
+    condensation = compute()
+    save_condensation(cache_dir, key, condensation)
+    return condensation, False

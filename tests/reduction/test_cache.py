@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 import skfem
 
-from reduction.cache import (cached_craig_bampton, load_condensation, reduction_key, save_condensation)
+from reduction.cache import (cached_condensation, cached_craig_bampton, load_condensation, reduction_key,
+                             save_condensation)
 from reduction.condensation import condense
 from reduction.craig_bampton import craig_bampton
 from reduction.elasticity import assemble_elastic_body
@@ -75,3 +76,19 @@ def test_condensation_round_trip_expands_like_the_original(plate, tmp_path):
         handle.attrs["fretwork_format"] = "something else"
     with pytest.raises(InputError, match="not a fretwork condensation cache file"):
         load_condensation(tmp_path, "bad")
+
+
+def test_cached_condensation_skips_the_second_schur_complement(plate, tmp_path):
+    mesh, body, clamp, face = plate
+    key = reduction_key(mesh, {"E": 70_000.0}, {"face": face, "clamp": clamp})
+    calls = []
+
+    def compute():
+        calls.append(1)
+        return condense(body.stiffness, face, fixed=clamp)
+
+    first, hit_first = cached_condensation(tmp_path, key, body.stiffness, compute)
+    second, hit_second = cached_condensation(tmp_path, key, body.stiffness, compute)
+    assert (hit_first, hit_second, len(calls)) == (False, True, 1)
+    u_r = np.linspace(0, 1e-3, face.size)
+    np.testing.assert_allclose(second.expand(u_r), first.expand(u_r), rtol=1e-12, atol=1e-15)
