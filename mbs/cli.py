@@ -1,7 +1,10 @@
-"""Command-line part of the engine-speed sweep: `fretwork sweep SCENE.toml --speeds 500:800:10`.
+"""Command-line parts of the multibody model.
 
-The lead's CLI registers the sub-command with add_sweep_parser(subparsers) and dispatches to
-run_sweep(args). Prints a summary table (or JSON with --json); the progress bar goes to stderr.
+`fretwork sweep SCENE.toml --speeds 500:800:10 [--json]`: engine-speed sweep
+(add_sweep_parser / run_sweep). `fretwork mbs SCENE.toml [--out DIR] [--json]`: one run at the
+scene's speed with HDF5 histories, spectra, Campbell diagram and plots (add_run_parser /
+run_single). The lead's CLI registers them and calls args.handler(args). Summaries go to stdout
+(JSON with --json), progress bars to stderr.
 """
 
 from __future__ import annotations
@@ -10,10 +13,13 @@ import json
 import sys
 from pathlib import Path
 
+import exudyn as exu
 import numpy as np
 from tqdm import tqdm
 
 from mbs.plots import plot_campbell, plot_sweep
+from mbs.run import run_model
+from mbs.model import SimulationError
 from mbs.scene import load_model_params
 from mbs.sweep import parse_speeds, speed_sweep
 from reduction.errors import InputError
@@ -74,3 +80,47 @@ def run_sweep(args) -> int:
         print(_table(result))
         print(f"results: {args.out}")
     return 0 if np.isfinite(result.wing_amplitude).any() else 1
+
+
+def add_run_parser(subparsers):
+    """Add the `mbs` sub-command (one multibody run) to an argparse subparsers object."""
+    parser = subparsers.add_parser(
+        "mbs", help="one run of the crankshaft-counterweight model (histories, spectra, Campbell)",
+        description="Simulate the scene's [mbs] model at its engine speed; write run.h5 (/histories) and PNGs.")
+    parser.add_argument("scene", help="scene TOML file (its [mbs] table sets the model)")
+    parser.add_argument("--out", default="results/mbs", help="output folder (default: %(default)s)")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
+    parser.set_defaults(handler=run_single)
+    return parser
+
+
+def run_single(args) -> int:
+    """One run; 0 on success, 1 if the time integration failed, 2 on bad input."""
+    try:
+        params = load_model_params(args.scene)
+    except InputError as error:
+        print(f"fretwork mbs: {error}", file=sys.stderr)
+        return 2
+    try:
+        outputs = run_model(params, args.out)
+    except (SimulationError, exu.SolverError) as error:
+        print(f"fretwork mbs: {error}", file=sys.stderr)
+        return 1
+    histories = outputs.histories
+    steady = histories.wing_torsion[:, len(histories.time) // 2:]
+    summary = {
+        "file": str(outputs.results_file),
+        "plots": {name: str(path) for name, path in outputs.plots.items()},
+        "speed_rpm": params.speed_rpm,
+        "wing_torsion_amplitude_mm": (0.5 * (steady.max(axis=1) - steady.min(axis=1))).tolist(),
+        "torsion_mode_hz": outputs.reduced.torsion_frequency,
+        "real_time_factor": histories.real_time_factor,
+        "time_step_s": params.solver.time_step,
+        "cb_modes": params.n_modes,
+    }
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        for key, value in summary.items():
+            print(f"{key}: {value}")
+    return 0

@@ -98,3 +98,18 @@ def test_default_model_resonates_where_the_gear_order_crosses_the_coupled_torsio
     print(f"\npeak {result.peak_speed():.0f} rpm, crossing {nearest['speed_rpm']:.1f} rpm at {nearest['frequency_hz']:.1f} Hz; "
           f"amplitudes um {np.round(1e3 * result.wing_amplitude[:, 0], 3).tolist()}")
     assert abs(result.peak_speed() - nearest["speed_rpm"]) <= step
+
+
+def test_cli_single_run_writes_histories_and_reports_json(tmp_path, capsys):
+    from mbs.cli import add_run_parser
+
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[mbs]\nspeed_rpm = 600\nn_modes = 2\n[mbs.solver]\nrevolutions = 1.0\ntime_step = 1e-4\n')
+    parser = argparse.ArgumentParser()
+    add_run_parser(parser.add_subparsers())
+    args = parser.parse_args(["mbs", str(scene), "--out", str(tmp_path / "run"), "--json"])
+    assert args.handler(args) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["speed_rpm"] == 600 and summary["cb_modes"] == 2
+    with h5py.File(summary["file"]) as root:
+        assert "cw1_wing_torsion" in root["histories"]
