@@ -272,9 +272,12 @@ class ContactSolver:
                 too_much_wear = float(wear_now.max(initial=0.0)) > self.settings.wear_cap
             if solved is None or too_much_wear:
                 if level >= self.settings.max_cutbacks:
-                    reason = ("the wear increment stays above the cap "
-                              f"{self.settings.wear_cap:g} mm" if too_much_wear else
-                              self._failure_reason())
+                    reason = (f"the wear increment stays above the cap {self.settings.wear_cap:g} mm "
+                              f"({float(wear_now.max()):.3g} mm in the smallest sub-step); wear that "
+                              "does not shrink with the step makes the interface slip by itself "
+                              "(explicit wear is unstable at this cycle jump): lower the cycle "
+                              f"jump ({effects.cycle_jump:g}) or the wear coefficients, or raise "
+                              "the cap" if too_much_wear else self._failure_reason())
                     raise ConvergenceError(
                         f"increment to amplitudes {np.round(amplitudes, 6).tolist()} failed with "
                         f"sub-steps of 2^-{level} of it ({stats.cutbacks} cutbacks), the last "
