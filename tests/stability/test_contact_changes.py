@@ -16,7 +16,7 @@ import pytest
 
 from contact import procedure
 from contact.law import ContactLaw, Status
-from contact.solver import NewtonSettings
+from contact.solver import ConvergenceError, NewtonSettings
 from stability_harness import (LINE_LOAD, Watchdog, cylinder, drive, flat, interface_forces, preload)
 
 ENERGY_TOLERANCE = 0.005
@@ -123,6 +123,20 @@ class Scaled(procedure.LoadProgram):
         return super().cycle(phase) * self.scale
 
 
+def _worn_punch():
+    """Flat punch with Archard wear w = 1e-7 mm²/N per body, μ = 0.2, wear cap 0.2 µm."""
+    law = ContactLaw(normal_stiffness=4e6, critical_slip=1e-3, cof_max=0.2,
+                     wear_coefficients=(1e-7, 1e-7), wear_form="pressure")
+    return flat(5, normal="motion", law=law, wear_bodies=2,
+                settings=NewtonSettings(wear_cap=2e-4, max_cutbacks=12))
+
+
+def _punch_program(case):
+    """Pressed 4 µm down (ramp), slid ±10 µm (cycles)."""
+    return Scaled(case.patterns, {"normal": "ramp", "tangential": "cyclic"},
+                  scale=np.array([0.004 if p == "normal" else 0.01 for p in case.patterns]))
+
+
 def test_wear_removes_the_whole_overclosure_and_points_open(record_property):
     """Flat punch pressed 4 µm down and slid ±10 µm (gross slip, μ = 0.2), Archard wear with
     w·J = 3e-3 mm²/N: the worn depth reaches the approach, the clamping force vanishes and
@@ -130,12 +144,8 @@ def test_wear_removes_the_whole_overclosure_and_points_open(record_property):
     assertion: the clamping force falls by tens of per cent per increment, so the
     backward-Euler dissipation is first-order off, and the energy meter sees increments,
     not the capped sub-steps (balance off by 6.7 %)."""
-    law = ContactLaw(normal_stiffness=4e6, critical_slip=1e-3, cof_max=0.2,
-                     wear_coefficients=(1e-7, 1e-7), wear_form="pressure")
-    case = flat(5, normal="motion", law=law, wear_bodies=2,
-                settings=NewtonSettings(wear_cap=2e-4, max_cutbacks=12))
-    program = Scaled(case.patterns, {"normal": "ramp", "tangential": "cyclic"},
-                     scale=np.array([0.004 if p == "normal" else 0.01 for p in case.patterns]))
+    case = _worn_punch()
+    program = _punch_program(case)
     settings = procedure.Procedure(preload_increments=5, increments_per_cycle=20, wear_cycles=8,
                                    cycle_jump=3e4, stationary_window=3)
     watchdog = Watchdog(case, max_cutbacks=16)
@@ -151,6 +161,23 @@ def test_wear_removes_the_whole_overclosure_and_points_open(record_property):
     opened = last.status == Status.OPEN
     assert np.all(gap[opened] >= overclosure[opened])
     assert gap.max() == pytest.approx(0.004, rel=0.01)
+
+
+def test_unstable_cycle_jump_is_reported_not_ground_through(record_property):
+    """The same punch with J = 1e5: each sub-step's wear shifts the load so much that the
+    interface slips by itself and the wear of even the smallest sub-step exceeds the cap.
+    The solver must stop with a message that names the cap and the cycle jump."""
+    case = _worn_punch()
+    program = _punch_program(case)
+    settings = procedure.Procedure(preload_increments=5, increments_per_cycle=20, wear_cycles=8,
+                                   cycle_jump=1e5, stationary_window=3)
+    watchdog = Watchdog(case, max_cutbacks=16)
+    with pytest.raises(ConvergenceError, match="wear increment stays above the cap") as failure:
+        procedure.run(case.solver, case.state, program, settings, cof_evolution=False, wear=True,
+                      observer=watchdog)
+    record_property("outcome", {**watchdog.summary(), "message": str(failure.value)})
+    assert "cycle jump (100000)" in str(failure.value)
+    assert watchdog.increments >= 5, "the preload must pass before wear starts"
 
 
 def test_wear_energy_balance_with_release(record_property):
