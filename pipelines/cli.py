@@ -7,6 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from reduction.errors import InputError
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -68,6 +70,37 @@ def cmd_demo(args) -> int:
     return 0
 
 
+def cmd_reduce(args) -> int:
+    from reduction.report import accuracy_report_for_mesh, plot_error_vs_modes
+
+    report = accuracy_report_for_mesh(args.mesh, args.youngs_modulus, args.poisson_ratio, args.density,
+                                      args.modes, args.interface_sets, clamp_sets=tuple(args.clamp_sets or ()))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    plot = plot_error_vs_modes(report, out / "reduction_error_vs_modes.png")
+    if args.json:
+        print(_json({"summary": report.summary(), "records": report.to_records(), "plot": str(plot)}))
+    else:
+        for key, value in report.summary().items():
+            print(f"  {key}: {value}")
+        print(f"  plot: {plot}")
+    return 0
+
+
+def cmd_study(args) -> int:
+    from pipelines.studies import constant_cof_comparison
+
+    probes = {f"P{k + 1}": [float(v) for v in p.split(",")] for k, p in enumerate(args.probe)}
+    records = constant_cof_comparison(args.scene, probes)
+    if args.json:
+        print(_json(records))
+    else:
+        for r in records:
+            print(f"{r['model']:<20} {r['probe']} at {np.round(r['position_mm'], 2)} mm: "
+                  f"max shear {r['max_shear_MPa']:.2f} MPa (slip area {r['slip_area_fraction']:.0%})")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="fretwork", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -85,16 +118,39 @@ def build_parser() -> argparse.ArgumentParser:
     demo = sub.add_parser("demo", help="run the main job on the built-in default scene")
     demo.add_argument("--out", default="results/demo")
     demo.set_defaults(func=cmd_demo)
+    reduce = sub.add_parser("reduce", help="accuracy of a Craig-Bampton reduction of a mesh")
+    reduce.add_argument("mesh", help="mesh file (Abaqus .inp, Gmsh .msh, ...) with named node sets")
+    reduce.add_argument("--modes", type=int, required=True, help="fixed-interface modes")
+    reduce.add_argument("--youngs-modulus", type=float, default=206000.0, help="MPa")
+    reduce.add_argument("--poisson-ratio", type=float, default=0.3)
+    reduce.add_argument("--density", type=float, default=7.85e-9, help="t/mm³")
+    reduce.add_argument("--interface-sets", nargs="*", help="node sets coupled as interfaces (default: all)")
+    reduce.add_argument("--clamp-sets", nargs="*", help="node sets held fixed")
+    reduce.add_argument("--out", default="results/reduce")
+    reduce.add_argument("--json", action="store_true")
+    reduce.set_defaults(func=cmd_reduce)
+    study = sub.add_parser("study", help="studies that compare several runs of a scene")
+    kinds = study.add_subparsers(dest="study", required=True)
+    constant = kinds.add_parser("constant-cof", help="variable vs constant COF (paper Fig. 8)")
+    constant.add_argument("scene")
+    constant.add_argument("--probe", action="append", default=[],
+                          help="probe point 'x,y[,z]' in mm (repeat; paper's P1, P2)")
+    constant.add_argument("--json", action="store_true")
+    constant.set_defaults(func=cmd_study)
+    from mbs.cli import add_run_parser, add_sweep_parser
     from pipelines.fmu import add_export_fmu_parser
     add_export_fmu_parser(sub)
+    add_sweep_parser(sub)
+    add_run_parser(sub)
     return parser
 
 
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    handler = getattr(args, "func", None) or getattr(args, "handler")
     try:
-        return args.func(args)
+        return handler(args)
     except InputError as error:
         print(f"fretwork: error: {error}", file=sys.stderr)
         return 2

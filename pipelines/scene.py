@@ -108,7 +108,8 @@ PATTERN_KEYS = {
     "history": (str, True, lambda v: None if v in ("ramp", "cyclic", "constant") else
                 "must be 'ramp', 'cyclic' or 'constant'", "time shape"),
 }
-TOP_LEVEL = ("scene", "materials", "bodies", "bolts", "contact", "loads", "motions", "procedure")
+# [mbs] is the multibody model's table, validated by mbs.scene.
+TOP_LEVEL = ("scene", "materials", "bodies", "bolts", "contact", "loads", "motions", "procedure", "mbs")
 OPTIONAL_TABLES = ("bolts",)
 
 

@@ -49,3 +49,26 @@ def test_bad_scene_exits_2_with_message_and_writes_nothing(coarse_cylinder, tmp_
 def test_missing_scene_file_exits_2(tmp_path, capsys):
     assert main(["run", str(tmp_path / "nope.toml"), "--out", str(tmp_path / "o")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_reduce_reports_frequency_errors_that_shrink_with_modes(tmp_path, capsys):
+    import skfem
+
+    mesh = skfem.MeshHex.init_tensor(np.linspace(0, 100, 21), np.linspace(0, 10, 3), np.linspace(0, 10, 3))
+    points = mesh.p.T
+    hexes = mesh.t.T[:, [0, 2, 4, 1, 3, 6, 7, 5]]  # scikit-fem order → Abaqus C3D8 order
+    path = tmp_path / "bar.inp"
+    meshio.Mesh(points, [("hexahedron", hexes)],
+                point_sets={"clamp": np.flatnonzero(points[:, 0] == 0.0),
+                            "tip": np.flatnonzero(points[:, 0] == 100.0)}).write(path)
+    assert main(["reduce", str(path), "--modes", "12", "--clamp-sets", "clamp", "--interface-sets", "tip",
+                 "--out", str(tmp_path / "red"), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    errors = {}
+    for r in report["records"]:
+        if r["quantity"] == "frequency" and r["case"] == "interfaces free":
+            errors.setdefault(r["modes"], []).append(abs(r["relative_error"]))
+    counts = sorted(errors)
+    assert max(errors[counts[-1]]) < 5e-3
+    assert max(errors[counts[-1]]) <= max(errors[counts[0]])
+    assert (tmp_path / "red" / "reduction_error_vs_modes.png").exists()
