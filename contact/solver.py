@@ -203,7 +203,12 @@ class ContactSolver:
                 best = (candidate_merit, g, candidate)
         merit, g, (r_kin, r_ctl, response, forces) = best
         for iteration in range(1, self.settings.max_iterations + 1):
-            delta_g, delta_q, searching = self._newton_step(response, g, state, r_kin, r_ctl, loaded)
+            try:
+                delta_g, delta_q, searching = self._newton_step(response, g, state, r_kin, r_ctl, loaded)
+            except np.linalg.LinAlgError:
+                # A singular tangent (e.g. every point sliding under force control) or an
+                # iterative solve that gives up: this attempt fails and is cut back.
+                break
             step = 1.0
             # A contact-search step (no point closed yet) is taken whole: the merit of the
             # open configuration is no guide to how far the body has to move.
