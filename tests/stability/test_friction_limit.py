@@ -120,6 +120,23 @@ def test_gross_slip_under_displacement_control(record_property):
     assert abs(watchdog.energy_error) < ENERGY_TOLERANCE
 
 
+def test_force_control_reversal_near_the_limit_3d(record_property):
+    """10×10 points (Krylov Newton solve), Q cycled to ±0.999·μP at 10 kN: converges, the
+    centre keeps sticking, P and Q are transmitted exactly."""
+    case = flat(10, tangential="force", cof0=0.2)
+    force = 100.0 * 10.0 * 10.0
+    watchdog = Watchdog(case, max_cutbacks=2)
+    rows = np.vstack([[force, 0.0], sine_cycles(case, {"normal": force}, {"tangential": 0.1998 * force}, 20)])
+    steps = drive(case, rows, watchdog)
+    record_property("outcome", watchdog.summary())
+    for step in steps:
+        normal, tangential = interface_forces(case, step.equilibrium)
+        assert normal == pytest.approx(force, rel=1e-8)
+        assert np.linalg.norm(tangential) == pytest.approx(abs(step.amplitudes[1]), rel=1e-6, abs=1e-6 * force)
+        assert np.any(step.status == Status.STICK)
+    assert abs(watchdog.energy_error) < ENERGY_TOLERANCE
+
+
 def _assert_clear_failure(case, rows, limit_seconds):
     watchdog = Watchdog(case, max_cutbacks=0)
     start = time.perf_counter()
@@ -144,9 +161,11 @@ def test_force_control_past_the_limit_reports_lost_equilibrium_2d(overload, reco
     assert watchdog.increments == 11
 
 
-def test_force_control_past_the_limit_reports_lost_equilibrium_3d(record_property):
-    """Blocks pressed by 10 kN (μ = 0.2): a tangential 2.5 kN cannot be carried."""
-    case = flat(4, tangential="force", cof0=0.2)
+@pytest.mark.parametrize("points_per_side", [4, 10])
+def test_force_control_past_the_limit_reports_lost_equilibrium_3d(points_per_side, record_property):
+    """Blocks pressed by 10 kN (μ = 0.2): a tangential 2.5 kN cannot be carried. 16 points
+    take the dense direct Newton solve, 100 points the preconditioned GMRES one."""
+    case = flat(points_per_side, tangential="force", cof0=0.2)
     force = 100.0 * 10.0 * 10.0
     rows = np.array([[force, 0.0], [force, 0.15 * force], [force, 0.25 * force]])
     watchdog, message = _assert_clear_failure(case, rows, limit_seconds=60.0)
