@@ -55,8 +55,9 @@ def test_penalty_and_critical_slip_sweep_2d(coarse_cylinder, normal_stiffness, c
 @pytest.mark.parametrize("critical_slip", [1e-5, 1e-2])
 @pytest.mark.parametrize("normal_stiffness", [1e3, 1e8])
 def test_penalty_and_critical_slip_corners_3d(normal_stiffness, critical_slip, record_property):
-    """4×4 points, 100 MPa, ±5 µm in 40 increments per cycle."""
-    case = flat(4)
+    """10×10 points (the preconditioned-GMRES Newton path), 100 MPa, ±5 µm, 40 increments
+    per cycle."""
+    case = flat(10)
     case = with_law(case, normal_stiffness=normal_stiffness, critical_slip=critical_slip)
     force = 100.0 * 10.0 * 10.0
     rows = np.vstack([[force, 0.0], sine_cycles(case, {"normal": force}, {"tangential": 5e-3}, 40)])
@@ -107,7 +108,8 @@ def test_cof_jumps_to_max_within_one_increment_2d(record_property):
 
 
 def test_cof_jumps_to_max_within_one_increment_3d(record_property):
-    case = flat(4)
+    """10×10 points, μ₀ = 0.2 → μ_max = 0.7 with k = 1000 mm/N."""
+    case = flat(10)
     case = with_law(case, cof_rate=1000.0, cof_max=0.7)
     force = 100.0 * 10.0 * 10.0
     rows = np.vstack([[force, 0.0], sine_cycles(case, {"normal": force}, {"tangential": 5e-3}, 40, cycles=2)])
