@@ -1,0 +1,44 @@
+"""The verdict of the procedure on synthetic cycle histories (SPEC §5)."""
+
+import numpy as np
+
+from contact.procedure import CycleSummary, Procedure, _loosening, _verdict
+
+PROCEDURE = Procedure(loosening_window=10, area_tolerance=0.01)
+
+
+def _history(clamp, stick, slip, phase="wear"):
+    cycles = []
+    for k, (force, stuck, slipping) in enumerate(zip(clamp, stick, slip)):
+        summary = CycleSummary(cycle=k + 1, phase=phase, equivalent_cycles=k + 1.0, pressure=None, shear=None,
+                               cof=None, max_utilised_cof=None, max_shear=None, status=None, slip_range=None,
+                               dissipation_in_cycle=None, state=None, clamp_force=force)
+        summary.figures = {"stick_area_fraction": stuck, "slip_area_fraction": slipping}
+        cycles.append(summary)
+    return cycles
+
+
+def test_steady_clamp_loss_with_shrinking_stick_area_is_loosening():
+    n = 12
+    history = _history(20000 - 150 * np.arange(n), np.linspace(0.2, 0.02, n), np.linspace(0.8, 0.98, n))
+    assert _loosening(history, PROCEDURE)
+    assert _verdict(history, PROCEDURE, stationary=False) == "loosening"
+
+
+def test_clamp_loss_that_levels_off_is_not_loosening():
+    n = 12
+    force = 30000 - 1000 * (1 - np.exp(-np.arange(n) / 1.5))  # about 1 kN lost, then stable
+    history = _history(force, np.linspace(0.6, 0.97, n), np.linspace(0.4, 0.0, n))
+    assert not _loosening(history, PROCEDURE)
+    assert _verdict(history, PROCEDURE, stationary=True) == "stick"
+
+
+def test_sliding_at_cof_max_with_stable_clamp_is_damage():
+    n = 12
+    history = _history(np.full(n, 30000.0), np.full(n, 0.6), np.full(n, 0.4))
+    assert _verdict(history, PROCEDURE, stationary=False) == "damage"
+
+
+def test_loosening_needs_a_full_window_of_wear_cycles():
+    history = _history(20000 - 500 * np.arange(5), np.linspace(0.2, 0.0, 5), np.ones(5))
+    assert not _loosening(history, PROCEDURE)
