@@ -13,7 +13,6 @@ import json
 import sys
 from pathlib import Path
 
-import exudyn as exu
 import numpy as np
 from tqdm import tqdm
 
@@ -103,7 +102,7 @@ def run_single(args) -> int:
         return 2
     try:
         outputs = run_model(params, args.out)
-    except (SimulationError, exu.SolverError) as error:
+    except SimulationError as error:
         print(f"fretwork mbs: {error}", file=sys.stderr)
         return 1
     histories = outputs.histories

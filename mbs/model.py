@@ -19,6 +19,8 @@ Units: mm, N, t, s, rad.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 import time as wallclock
 from dataclasses import dataclass, field
@@ -341,12 +343,18 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None
     settings.solution.file.write = False
     settings.solution.sensors.writePeriod = solver.time_step
     settings.show.statistics = False
+    # exudyn prints its solver diagnostics; keep them out of stdout and in the error instead.
+    solver_log = io.StringIO()
     started = wallclock.perf_counter()
-    converged = mbs.SolveDynamic(settings)
+    try:
+        with contextlib.redirect_stdout(solver_log):
+            converged = mbs.SolveDynamic(settings)
+    except exu.SolverError:
+        converged = False
     wall_time = wallclock.perf_counter() - started
     if not converged:
-        raise SimulationError(f"time integration did not converge at {params.speed_rpm} rpm "
-                              f"(time step {solver.time_step} s)")
+        raise SimulationError(f"time integration did not converge at {params.speed_rpm} rpm (time step "
+                              f"{solver.time_step} s); exudyn: {' '.join(solver_log.getvalue().split())[:400]}")
     return _collect(mbs, sensors, reduced, energy, wall_time)
 
 
