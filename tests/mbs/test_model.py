@@ -96,3 +96,14 @@ def test_real_time_factor_of_the_default_model():
 def test_unknown_effect_is_rejected():
     with pytest.raises(InputError, match="unknown effects"):
         ModelParams(effects=frozenset({"gas_torque", "earthquake"})).validate()
+
+
+def test_a_failing_time_integration_raises_simulation_error_without_printing(capsys):
+    from mbs.model import SimulationError
+
+    throw = replace(CrankThrowParams(), bearing_stiffness=2e10,
+                    pin_stiffness=tuple(np.asarray(CrankThrowParams().pin_stiffness) * 1e4))
+    params = ModelParams(n_modes=2, throw=throw, solver=SolverParams(revolutions=0.2, newton_tolerance=1e-10))
+    with pytest.raises(SimulationError, match="did not converge at 750.0 rpm"):
+        simulate(params)
+    assert capsys.readouterr().out == ""
