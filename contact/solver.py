@@ -106,7 +106,7 @@ class ContactSolver:
         self.h0 = structure.initial_overclosure
         self.stiffness_scale = float(np.abs(np.diag(structure.stiffness)).max())  # N/mm
         self.rigid_modes = _rigid_modes(space, self.stiffness_scale)
-        self._last_failure = None  # (response, r_ctl, force scale) of the last failed attempt
+        self._last_failure = None  # (response, r_ctl, force scale, loaded) of the last failed attempt
         # S_q without the round-off stiffness (~1e-8 N/mm) of the rigid modes: left in, it
         # would let a body loaded beyond the friction limit find a spurious equilibrium
         # kilometres away instead of reporting the loss of tangential equilibrium.
@@ -232,14 +232,18 @@ class ContactSolver:
                 stats.max_iterations = max(stats.max_iterations, iteration)
                 return Equilibrium(g, q, forces, amplitudes.copy()), response
         stats.iterations += self.settings.max_iterations
-        self._last_failure = (response, r_ctl, force_scale)
+        self._last_failure = (response, r_ctl, force_scale, loaded)
         return None
 
     def _failure_reason(self) -> str:
         """Why the last attempt failed, in words: lost tangential equilibrium or plain divergence."""
         generic = ("Newton did not converge (the step may be too large for the contact status "
                    "changes; try more increments)")
-        response, r_ctl, force_scale = self._last_failure
+        response, r_ctl, force_scale, loaded = self._last_failure
+        if loaded and not np.any(response.pressure > 0.0):
+            return ("no point of the interface stays pressed: the load pulls the body off the "
+                    "contact, and a body held only by the contact has no equilibrium then "
+                    "(support it, or prescribe the motion of its control DOF instead of a force)")
         closed = response.status != Status.OPEN
         if not self.rigid_modes.size or not np.any(closed) or np.any(response.status[closed] == Status.STICK):
             return generic
