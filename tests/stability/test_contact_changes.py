@@ -110,6 +110,18 @@ def test_normal_force_through_zero_and_back(record_property):
     assert interface_forces(case, steps[-1].equilibrium)[0] == pytest.approx(LINE_LOAD, rel=1e-8)
 
 
+def test_tensile_force_on_a_floating_body_is_reported(record_property):
+    """Force control through zero into tension: the cylinder, held only by the contact, has
+    no equilibrium; the error must say so rather than suggest smaller steps."""
+    case = cylinder()
+    watchdog = Watchdog(case, max_cutbacks=0)
+    rows = np.vstack([preload(case), [[0.5, 0.0], [0.0, 0.0], [-0.1, 0.0]]])
+    with pytest.raises(ConvergenceError, match="pulls the body off the contact") as failure:
+        drive(case, rows, watchdog)
+    record_property("outcome", {**watchdog.summary(), "message": str(failure.value)})
+    assert watchdog.increments == 12
+
+
 @dataclass(frozen=True)
 class Scaled(procedure.LoadProgram):
     """The procedure's load program with each pattern's amplitude scaled (mm here)."""
