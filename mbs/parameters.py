@@ -115,6 +115,7 @@ class SolverParams:
     "free": no drive, the shaft starts at engine speed and spins freely (energy check).
     newton_tolerance: relative Newton tolerance; exudyn's default 1e-8 is below the round-off
     of the stiff bearing/pin springs and makes Newton fail on stiff throws.
+    ramp_revolutions: the excitation fades in over this many revolutions (0: full from t = 0).
     """
 
     time_step: float = 5.0e-5
@@ -123,10 +124,13 @@ class SolverParams:
     damping: bool = True
     drive: str = "constant_speed"
     newton_tolerance: float = 1e-6
+    ramp_revolutions: float = 0.5
 
     def validate(self) -> None:
         if self.time_step <= 0 or self.revolutions <= 0:
             raise InputError("solver time_step and revolutions must be positive")
+        if self.ramp_revolutions < 0:
+            raise InputError("solver ramp_revolutions must not be negative")
         if not 0.0 <= self.spectral_radius <= 1.0:
             raise InputError("solver spectral_radius must lie in [0, 1]")
         if self.drive not in ("constant_speed", "free"):
