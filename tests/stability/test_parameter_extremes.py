@@ -147,6 +147,6 @@ def test_coarse_and_fine_increments_agree(control, record_property):
             assert abs(watchdog.energy_error) < ENERGY_TOLERANCE
         if control.startswith("partial"):
             assert all(np.any(s.status == Status.STICK) for s in steps)
-    record_property("outcome", outcome)
+    record_property("outcome", {**outcome, "second_cycle_dissipation_mJ": dissipation})
     assert dissipation[4] > 0.0
     assert dissipation[4] == pytest.approx(dissipation[200], rel=0.005)
