@@ -32,62 +32,15 @@ from exudyn.FEM import ObjectFFRFreducedOrderInterface
 
 from mbs.counterweight import ReducedCounterweight, reduce_counterweight
 from mbs.excitation import gas_torque_table
+from mbs.histories import RunHistories, collect_histories
 from mbs.parameters import CrankThrowParams, ModelParams
 
-#: CW local frame -> crank frame: CW y (radial outward) = -x crank, CW x = y crank, z = z.
 class SimulationError(RuntimeError):
     """The time integration of a run failed (Newton did not converge)."""
 
 
-#: Energy is evaluated on at most this many samples: the CW kinetic energy needs the full FE mass.
-ENERGY_SAMPLES = 201
-
+#: CW local frame -> crank frame: CW y (radial outward) = -x crank, CW x = y crank, z = z.
 COUNTERWEIGHT_ROTATION = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-
-
-@dataclass(frozen=True)
-class RunHistories:
-    """Fixed-step histories of one run (rows = samples at ``time``).
-
-    Per counterweight c (first axis of every cw_* array, c = 0 on journal-1 side, 1 on journal-2
-    side), all vectors in the CW local frame (x tangential, y radial out, z crank axis):
-    cw_interface_displacement (2, n, 3) mm and cw_interface_rotation (2, n, 3) rad: CW
-    interface relative to the web; cw_interface_force (2, n, 3) N and cw_interface_moment
-    (2, n, 3) N mm: load the web applies to the CW at its interface; cw_modal_coordinates,
-    cw_modal_velocities, cw_modal_accelerations (2, n, m); cw_frame_acceleration (2, n, 3) mm/s^2
-    (interface origin, absolute); cw_angular_velocity (2, n, 3) rad/s;
-    cw_angular_acceleration (2, n, 3) rad/s^2; cw_wing_tip_axial (2, n, 2) mm: axial deformation
-    of the two wing tips relative to the interface. crank_angle (n,) rad, crank_speed (n,) rad/s.
-    energy (n,) mJ when requested, else None. wall_time: s spent in the solver.
-    """
-
-    time: np.ndarray
-    crank_angle: np.ndarray
-    crank_speed: np.ndarray
-    cw_interface_displacement: np.ndarray
-    cw_interface_rotation: np.ndarray
-    cw_interface_force: np.ndarray
-    cw_interface_moment: np.ndarray
-    cw_modal_coordinates: np.ndarray
-    cw_modal_velocities: np.ndarray
-    cw_modal_accelerations: np.ndarray
-    cw_frame_acceleration: np.ndarray
-    cw_angular_velocity: np.ndarray
-    cw_angular_acceleration: np.ndarray
-    cw_wing_tip_axial: np.ndarray
-    energy_time: np.ndarray | None
-    energy: np.ndarray | None
-    wall_time: float
-
-    @property
-    def wing_torsion(self) -> np.ndarray:
-        """(2, n) mm: opposite-phase (torsion) part of the wing-tip axial motion, (u_+x - u_-x)/2."""
-        return 0.5 * (self.cw_wing_tip_axial[:, :, 1] - self.cw_wing_tip_axial[:, :, 0])
-
-    @property
-    def real_time_factor(self) -> float:
-        """Simulated seconds per wall-clock second."""
-        return float((self.time[-1] - self.time[0]) / self.wall_time)
 
 
 def _half_throw_inertia(throw: CrankThrowParams, side: float) -> eu.RigidBodyInertia:
@@ -267,26 +220,6 @@ def _add_sensors(mbs, items: _Items, energy: bool) -> dict:
     return sensors
 
 
-def _counterweight_energy(reduced: ReducedCounterweight, rotation, velocity, omega, q, q_t) -> np.ndarray:
-    """Kinetic + strain energy (mJ) of one CW from its frame motion and modal coordinates.
-
-    Nodal velocities in the CW frame: A^T v + omega x (x_ref + Psi q) + Psi q_t; kinetic energy
-    1/2 V^T M V with the full FE mass matrix, strain energy 1/2 q^T K_red q.
-    """
-    n_samples = q.shape[0]
-    psi = reduced.mode_shapes
-    positions = reduced.node_coordinates.ravel()[:, None] + psi @ q.T
-    local_velocity = np.einsum("sji,sj->si", rotation.reshape(n_samples, 3, 3), velocity)
-    pos = positions.reshape(-1, 3, n_samples)
-    omega_t = omega.T[None, :, :]
-    cross = np.cross(omega_t, pos, axis=1)
-    nodal = (cross + local_velocity.T[None, :, :]).reshape(-1, n_samples) + psi @ q_t.T
-    kinetic = 0.5 * np.einsum("is,is->s", nodal, reduced.mass @ nodal)
-    modal_stiffness = psi.T @ (reduced.stiffness @ psi)
-    strain = 0.5 * np.einsum("si,ij,sj->s", q, modal_stiffness, q)
-    return kinetic + strain
-
-
 def _build(params: ModelParams, reduced: ReducedCounterweight, *, loads: bool,
            initial_modal_coordinates: np.ndarray | None = None):
     speed = params.shaft_speed
@@ -362,49 +295,4 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None
     if not converged:
         raise SimulationError(f"time integration did not converge at {params.speed_rpm} rpm (time step "
                               f"{solver.time_step} s); exudyn: {' '.join(solver_log.getvalue().split())[:400]}")
-    return _collect(mbs, sensors, reduced, energy, wall_time)
-
-
-def _stored(mbs, sensor) -> np.ndarray:
-    return np.asarray(mbs.GetSensorStoredData(sensor))
-
-
-def _collect(mbs, sensors, reduced: ReducedCounterweight, energy: bool, wall_time: float) -> RunHistories:
-    spin = _stored(mbs, sensors["spin"])
-    # Sensors write when t reaches the next write time; round-off can store one instant twice.
-    keep = np.concatenate([[True], np.diff(spin[:, 0]) > 0.5 * np.median(np.diff(spin[:, 0]))])
-    spin = spin[keep]
-    time = spin[:, 0]
-    data = {key: np.stack([_stored(mbs, sensors[(key, c)])[keep, 1:] for c in range(2)])
-            for key in ("q", "q_t", "q_tt", "rotation", "acceleration", "omega", "alpha", "velocity",
-                        "joint_displacement", "joint_rotation", "joint_force", "joint_moment")}
-    rotation = data["rotation"].reshape(2, -1, 3, 3)
-    to_local = lambda vectors: np.einsum("csji,csj->csi", rotation, vectors)  # noqa: E731 (A^T v per sample)
-    tip_shapes = reduced.wing_tip_axial_shapes()
-    energy_time = total_energy = None
-    if energy:
-        picked = np.unique(np.linspace(0, len(time) - 1, ENERGY_SAMPLES).astype(int))
-        energy_time = time[picked]
-        total_energy = sum(_stored(mbs, s)[keep][picked, 1] for s in sensors["kinetic"] + sensors["potential"])
-        for c in range(2):
-            total_energy = total_energy + _counterweight_energy(
-                reduced, *(data[key][c][picked] for key in ("rotation", "velocity", "omega", "q", "q_t")))
-    return RunHistories(
-        time=time,
-        crank_angle=_stored(mbs, sensors["angle"])[keep, 6],
-        crank_speed=spin[:, 6],
-        cw_interface_displacement=data["joint_displacement"],
-        cw_interface_rotation=data["joint_rotation"],
-        cw_interface_force=-data["joint_force"],
-        cw_interface_moment=-data["joint_moment"],
-        cw_modal_coordinates=data["q"],
-        cw_modal_velocities=data["q_t"],
-        cw_modal_accelerations=data["q_tt"],
-        cw_frame_acceleration=to_local(data["acceleration"]),
-        cw_angular_velocity=data["omega"],
-        cw_angular_acceleration=to_local(data["alpha"]),
-        cw_wing_tip_axial=np.einsum("tm,csm->cst", tip_shapes, data["q"]),
-        energy_time=energy_time,
-        energy=total_energy,
-        wall_time=wall_time,
-    )
+    return collect_histories(mbs, sensors, reduced, energy, wall_time)

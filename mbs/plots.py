@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402 (backend must be chosen first)
 import numpy as np  # noqa: E402
 
 from mbs.campbell import Campbell  # noqa: E402
-from mbs.model import RunHistories  # noqa: E402
+from mbs.histories import RunHistories  # noqa: E402
 from mbs.spectra import Spectrum  # noqa: E402
 
 

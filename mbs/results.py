@@ -19,7 +19,7 @@ import numpy as np
 
 from mbs.campbell import Campbell
 from mbs.counterweight import ReducedCounterweight
-from mbs.model import RunHistories
+from mbs.histories import RunHistories
 from mbs.parameters import ModelParams
 from mbs.spectra import Spectrum
 

@@ -11,7 +11,8 @@ import numpy as np
 from mbs.campbell import Campbell, campbell_diagram
 from mbs.counterweight import ReducedCounterweight, reduce_counterweight
 from mbs.excitation import excitation_orders
-from mbs.model import RunHistories, simulate, system_eigenfrequencies
+from mbs.histories import RunHistories
+from mbs.model import simulate, system_eigenfrequencies
 from mbs.parameters import ModelParams
 from mbs.plots import plot_campbell, plot_spectrum, plot_time_history
 from mbs.results import write_run
