@@ -61,8 +61,8 @@ class KrylovSettings:
     """
 
     direct_below: int = 300
-    relative_tolerance: float = 1e-4
-    fresh_iterations: int = 2
+    relative_tolerance: float = 1e-3
+    fresh_iterations: int = 3
     max_iterations: int = 40
     single_precision: bool = True
 
