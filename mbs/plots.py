@@ -38,12 +38,14 @@ def plot_time_history(histories: RunHistories, path) -> Path:
     return _save(figure, path)
 
 
-def plot_spectrum(spectrum: Spectrum, path, *, xlabel: str = "frequency (Hz)", title: str = "") -> Path:
-    """Amplitude spectrum (micrometres) on a log scale."""
+def plot_spectrum(spectrum: Spectrum, path, *, xlabel: str = "frequency (Hz)", title: str = "",
+                  x_max: float | None = None) -> Path:
+    """Amplitude spectrum (micrometres) on a log scale, up to x_max (default: Nyquist)."""
     figure, ax = plt.subplots(figsize=(8, 4))
     amplitude = np.atleast_2d(np.asarray(spectrum.amplitude).T).T
+    shown = spectrum.frequency <= (np.inf if x_max is None else x_max)
     for k in range(amplitude.shape[1]):
-        ax.semilogy(spectrum.frequency, 1e3 * amplitude[:, k] + 1e-12, lw=0.8, label=f"CW{k + 1}")
+        ax.semilogy(spectrum.frequency[shown], 1e3 * amplitude[shown, k] + 1e-12, lw=0.8, label=f"CW{k + 1}")
     ax.set_xlabel(xlabel)
     ax.set_ylabel("amplitude (um)")
     ax.set_title(title)

@@ -58,14 +58,17 @@ def run_model(params: ModelParams, out_dir, *, reduced: ReducedCounterweight | N
     n_common = min(len(f) for f in system)
     campbell = campbell_diagram(reduced, speeds, orders, system_frequencies=np.array([f[:n_common] for f in system]))
     results_file = write_run(out_dir / "run.h5", params, reduced, histories, spectra, campbell)
+    shaft_hz = params.speed_rpm / 60.0
+    f_max = 1.25 * max(reduced.eigenfrequencies.max(), (orders.max() if orders.size else 0.0) * shaft_hz)
     plots = {
         "time_history": plot_time_history(histories, out_dir / "wing_time_history.png"),
         "spectrum": plot_spectrum(spectra["wing_torsion"], out_dir / "wing_spectrum.png",
-                                  title=f"wing torsion, {params.speed_rpm:g} rpm"),
+                                  title=f"wing torsion, {params.speed_rpm:g} rpm", x_max=f_max),
         "campbell": plot_campbell(campbell, out_dir / "campbell.png", operating_rpm=params.speed_rpm),
     }
     if "wing_torsion_orders" in spectra:
         plots["order_spectrum"] = plot_spectrum(spectra["wing_torsion_orders"], out_dir / "wing_order_spectrum.png",
-                                                xlabel="engine order", title="wing torsion, order spectrum")
+                                                xlabel="engine order", title="wing torsion, order spectrum",
+                                                x_max=f_max / shaft_hz)
     return RunOutputs(histories=histories, reduced=reduced, spectra=spectra, campbell=campbell,
                       results_file=results_file, plots=plots)
