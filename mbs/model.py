@@ -150,7 +150,12 @@ def _add_counterweights(mbs, params: ModelParams, reduced: ReducedCounterweight,
         interface_on_web = exu.HT(rotation=COUNTERWEIGHT_ROTATION, translation=[-throw.counterweight_radius, 0.0, 0.0])
         on_web = mbs.AddMarker(eu.MarkerBodyRigid(bodyNumber=items.half_throw_bodies[index], localHT=interface_on_web))
         on_cw = mbs.AddMarker(eu.MarkerNodeRigid(nodeNumber=created["nRigidBody"]))
-        joint = mbs.AddObject(eu.GenericJoint(markerNumbers=[on_web, on_cw], constrainedAxes=[1] * 6))
+        if throw.joint_stiffness is None:
+            joint = mbs.AddObject(eu.GenericJoint(markerNumbers=[on_web, on_cw], constrainedAxes=[1] * 6))
+        else:
+            joint = mbs.AddObject(eu.RigidBodySpringDamper(markerNumbers=[on_web, on_cw],
+                                                           stiffness=np.diag(throw.joint_stiffness)))
+            items.springs.append(joint)
         items.cw_rigid_nodes.append(created["nRigidBody"])
         items.cw_modal_nodes.append(created["nGenericODE2"])
         items.cw_joints.append(joint)

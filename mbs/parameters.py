@@ -35,6 +35,9 @@ class CrankThrowParams:
     pin_stiffness: 6 values for the elastic joint at the crank pin between the half-throws:
     3 translational (N/mm) then 3 rotational (N mm/rad), in the crank frame. They stand for the
     bending and torsion of pin and webs; pin_damping: same layout, N s/mm and N mm s/rad.
+    joint_stiffness: None (default) joins each CW interface rigidly to its web; or 6 values
+    (3 N/mm, 3 N mm/rad, CW frame) of a stiff spring standing for the bolted joint, so that the
+    interface motion relative to the web is the spring's deflection.
     Damping is light structural damping (about 1 % at the 400 Hz coupled torsion mode) so that
     resonances stand out; hydrodynamic oil-film damping of the bearings is not modelled.
     """
@@ -53,6 +56,7 @@ class CrankThrowParams:
     bearing_damping: float = 20.0
     pin_stiffness: tuple[float, ...] = (5.0e6, 5.0e6, 5.0e6, 5.0e11, 5.0e11, 5.0e11)
     pin_damping: tuple[float, ...] = (20.0, 20.0, 20.0, 2.0e6, 2.0e6, 2.0e6)
+    joint_stiffness: tuple[float, ...] | None = None
 
     @property
     def web_center_z(self) -> float:

@@ -107,3 +107,14 @@ def test_a_failing_time_integration_raises_simulation_error_without_printing(cap
     with pytest.raises(SimulationError, match="did not converge at 750.0 rpm"):
         simulate(params)
     assert capsys.readouterr().out == ""
+
+
+def test_stiff_joint_deflects_by_the_centrifugal_force_over_its_stiffness(reduced_cw4):
+    stiffness = 1.0e7
+    throw = replace(CrankThrowParams(), joint_stiffness=(stiffness,) * 3 + (1.0e12,) * 3)
+    params = ModelParams(n_modes=4, effects=QUIET, throw=throw, solver=SolverParams(revolutions=1.0, time_step=1e-4))
+    run = simulate(params, reduced=reduced_cw4)
+    radius = params.throw.counterweight_radius + reduced_cw4.center_of_mass[1]
+    force = reduced_cw4.total_mass * params.shaft_speed ** 2 * radius
+    assert run.cw_interface_displacement[:, :, 1].mean(axis=1) == pytest.approx([force / stiffness] * 2, rel=1e-2)
+    assert run.cw_interface_force[:, :, 1].mean(axis=1) == pytest.approx([-force] * 2, rel=1e-2)
