@@ -5,6 +5,11 @@ modal_damping_ratio, effects = ["gas_torque", "gear_mesh", "torsional_vibration"
 sub-tables ``[mbs.counterweight]``, ``[mbs.throw]``, ``[mbs.excitation]``, ``[mbs.solver]`` with
 the fields of the dataclasses of the same meaning (units as documented there). Anything not
 given keeps its default; an unknown key is an error that names it.
+
+Instead of an order table, ``[mbs.gas_pressure]`` may give a cylinder-pressure curve:
+file = CSV with two columns (crank angle deg over 0..720, gauge pressure MPa; '#' comments),
+bore and conrod_length (mm), optional max_order; the order table is then computed by
+mbs.excitation.gas_torque_from_pressure with the throw's crank radius.
 """
 
 from __future__ import annotations
@@ -13,7 +18,10 @@ import tomllib
 from dataclasses import fields, replace
 from pathlib import Path
 
+import numpy as np
+
 from mbs.counterweight import CounterweightGeometry
+from mbs.excitation import gas_torque_from_pressure
 from mbs.parameters import CrankThrowParams, ExcitationParams, ModelParams, SolverParams
 from reduction.errors import InputError
 
@@ -35,10 +43,35 @@ def _as_field_value(value):
     return tuple(value) if isinstance(value, list) else value
 
 
-def model_params_from_mapping(table: dict, where: str = "[mbs]") -> ModelParams:
-    """ModelParams from a mapping shaped like the scene's [mbs] table."""
+_PRESSURE_KEYS = {"file", "bore", "conrod_length", "max_order"}
+
+
+def _with_pressure_curve(params: ModelParams, table: dict, folder: Path, where: str) -> ModelParams:
+    _checked(table, _PRESSURE_KEYS, where)
+    missing = sorted({"file", "bore", "conrod_length"} - set(table))
+    if missing:
+        raise InputError(f"{where}: missing key(s) {missing}")
+    path = folder / table["file"]
+    try:
+        curve = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
+    except (OSError, ValueError) as error:
+        raise InputError(f"{where}: cannot read pressure curve {path}: {error}") from None
+    if curve.shape[1] != 2:
+        raise InputError(f"{where}: pressure curve {path} must have two columns (crank angle deg, pressure MPa)")
+    _, orders, amplitudes, phases = gas_torque_from_pressure(
+        curve[:, 0], curve[:, 1], bore=float(table["bore"]), crank_radius=params.throw.crank_radius,
+        conrod_length=float(table["conrod_length"]), max_order=float(table.get("max_order", 12.0)))
+    excitation = replace(params.excitation, gas_orders=tuple(orders), gas_torque_amplitudes=tuple(amplitudes),
+                         gas_torque_phases=tuple(phases))
+    return replace(params, excitation=excitation)
+
+
+def model_params_from_mapping(table: dict, where: str = "[mbs]", folder: Path = Path(".")) -> ModelParams:
+    """ModelParams from a mapping shaped like the scene's [mbs] table (folder: base of relative files)."""
+    table = dict(table)
+    pressure = table.pop("gas_pressure", None)
     top_fields = {f.name for f in fields(ModelParams)}
-    _checked(table, top_fields, where)
+    _checked(table, top_fields | {"gas_pressure"}, where)
     values = {}
     for name, value in table.items():
         if name in _SUBTABLES:
@@ -52,6 +85,8 @@ def model_params_from_mapping(table: dict, where: str = "[mbs]") -> ModelParams:
         else:
             values[name] = value
     params = replace(ModelParams(), **values)
+    if pressure is not None:
+        params = _with_pressure_curve(params, pressure, folder, f"{where}.gas_pressure")
     params.validate()
     return params
 
@@ -66,4 +101,4 @@ def load_model_params(path) -> ModelParams:
         raise InputError(f"scene file {path} does not exist") from None
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"scene file {path} is not valid TOML: {error}") from None
-    return model_params_from_mapping(scene.get("mbs", {}), where=f"{path}: [mbs]")
+    return model_params_from_mapping(scene.get("mbs", {}), where=f"{path}: [mbs]", folder=path.parent)

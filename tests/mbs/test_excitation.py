@@ -27,3 +27,30 @@ def test_only_switched_on_effects_bring_orders():
     assert excitation_orders(excitation, {"gear_mesh"}).tolist() == [48.0]
     assert excitation_orders(excitation, set()).size == 0
     assert 0.5 in excitation_orders(excitation, {"gas_torque"})
+
+
+def test_pressure_curve_with_a_long_conrod_gives_the_closed_form_first_order():
+    from mbs.excitation import gas_torque_from_pressure
+
+    angles = np.linspace(0.0, 720.0, 73)[:-1]
+    pressure = np.full_like(angles, 2.0)  # MPa, constant
+    bore, radius = 320.0, 200.0
+    mean, orders, amplitudes, phases = gas_torque_from_pressure(angles, pressure, bore=bore, crank_radius=radius,
+                                                                conrod_length=1e9, max_order=3.0)
+    # T = p A r sin(theta) = p A r cos(theta - pi/2): only order 1, phase -pi/2, no mean
+    first = list(orders).index(1.0)
+    assert amplitudes[first] == pytest.approx(2.0 * np.pi * bore ** 2 / 4 * radius, rel=1e-6)
+    assert phases[first] == pytest.approx(-np.pi / 2, abs=1e-6)
+    assert np.delete(amplitudes, first).max() < 1e-6 * amplitudes[first]
+    assert abs(mean) < 1e-6 * amplitudes[first]
+
+
+def test_firing_pressure_peak_gives_half_orders():
+    from mbs.excitation import gas_torque_from_pressure
+
+    angles = np.linspace(0.0, 720.0, 721)
+    pressure = 0.2 + 18.0 * np.exp(-0.5 * ((angles - 370.0) / 25.0) ** 2)  # firing just after TDC at 360 deg
+    mean, orders, amplitudes, _ = gas_torque_from_pressure(angles, pressure, bore=320.0, crank_radius=200.0,
+                                                           conrod_length=800.0)
+    assert mean > 0  # the expansion stroke does net work
+    assert amplitudes[list(orders).index(0.5)] > 0.1 * amplitudes.max()

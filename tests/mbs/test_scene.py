@@ -1,0 +1,35 @@
+"""Scene [mbs] table: sub-tables map onto the dataclasses; a pressure curve becomes the order table."""
+
+import numpy as np
+import pytest
+
+from mbs.scene import load_model_params
+from reduction.errors import InputError
+
+
+def test_scene_tables_set_the_model(tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[mbs]\nspeed_rpm = 700\neffects = ["gear_mesh"]\n'
+                     '[mbs.counterweight]\nwidth = 650\n[mbs.excitation]\ngear_teeth = 60\n')
+    params = load_model_params(scene)
+    assert params.speed_rpm == 700 and params.effects == frozenset({"gear_mesh"})
+    assert params.counterweight.width == 650 and params.excitation.gear_teeth == 60
+
+
+def test_pressure_curve_file_replaces_the_order_table(tmp_path):
+    angles = np.linspace(0.0, 719.0, 720)
+    pressure = 0.2 + 18.0 * np.exp(-0.5 * ((angles - 370.0) / 25.0) ** 2)
+    np.savetxt(tmp_path / "pressure.csv", np.column_stack([angles, pressure]), delimiter=",",
+               header="crank angle deg, pressure MPa")
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[mbs.gas_pressure]\nfile = "pressure.csv"\nbore = 320\nconrod_length = 800\nmax_order = 6\n')
+    excitation = load_model_params(scene).excitation
+    assert excitation.gas_orders == pytest.approx(np.arange(1, 13) / 2.0)
+    assert max(excitation.gas_torque_amplitudes) > 1e6  # N mm: kN m class for a 320 mm bore
+
+
+def test_missing_pressure_keys_are_named(tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[mbs.gas_pressure]\nfile = "pressure.csv"\n')
+    with pytest.raises(InputError, match=r"missing key\(s\) \['bore', 'conrod_length'\]"):
+        load_model_params(scene)
