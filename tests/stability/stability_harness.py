@@ -20,7 +20,7 @@ small 3D flat-on-flat blocks. Units: mm, N, MPa, mJ.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -179,7 +179,8 @@ class Watchdog(Observer):
     def summary(self) -> dict:
         out = {"increments": self.increments, "newton_total": self.iterations,
                "newton_max": self.max_iterations, "cutbacks": self.cutbacks,
-               "cutbacks_max": self.max_cutbacks_seen, "seconds": round(self.elapsed, 2)}
+               "cutbacks_max": self.max_cutbacks_seen, "seconds": round(self.elapsed, 2),
+               "friction_excess_max": self.max_excess}
         if self.meter is not None:
             out.update(work_mJ=self.external_work, dissipation_mJ=self.dissipation,
                        stick_source_mJ=self.meter.stick_source, energy_error=self.energy_error)
@@ -274,11 +275,3 @@ def sine_cycles(case: Case, held: dict, cyclic: dict, n_per_cycle: int, cycles: 
     shape = case.amplitudes(**cyclic)
     return base[None, :] + np.sin(2 * np.pi * phases)[:, None] * shape[None, :]
 
-
-def with_law(case_factory, **law_changes):
-    """Build a case and swap its law for one with ``law_changes`` (same structure)."""
-    case = case_factory()
-    law = replace(case.law, **law_changes)
-    case.law = law
-    case.solver = ContactSolver(case.space, law, case.solver.settings)
-    return case
