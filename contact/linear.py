@@ -14,9 +14,10 @@ Small closed blocks are factorised directly (dense LU). Large ones are solved by
 preconditioned with a dense single-precision LU of an earlier Jacobian, kept across Newton
 iterations and increments: between them the closed set rarely changes and the tangent
 changes little, so a few Krylov iterations (each one product with W and one triangular
-solve) replace an O(n³) factorisation. The factor is rebuilt when the closed set changes or
-when GMRES needs many iterations. The Newton correction is exact up to the GMRES tolerance;
-the converged equilibrium is set by the solver's residual test, not by this module.
+solve) replace an O(n³) factorisation. The factor is rebuilt when points close that it does
+not cover, or when the Krylov time lost to its age exceeds what the last rebuild took. The
+Newton correction is exact up to the GMRES tolerance; the converged equilibrium is set by
+the solver's residual test, not by this module (the condensed-versus-full test checks it).
 """
 
 from __future__ import annotations
