@@ -260,10 +260,11 @@ class ContactSolver:
                   effects: Effects) -> tuple[Equilibrium, ContactState, np.ndarray, IncrementStats]:
         """Advance from ``start`` to the load ``amplitudes``, cutting back as needed.
 
-        A sub-step that fails (or wears more than the cap) is halved; one that succeeds lets
-        the next grow back by a factor two, so an increment may take many sub-steps (a large
-        cycle jump against the wear cap) while no sub-step is smaller than 2^-max_cutbacks
-        of the increment. Returns the converged equilibrium, the advanced state, the final
+        A sub-step that fails (or wears more than the cap) is halved; two in a row that
+        succeed let the next grow back by a factor two (growing after every success would
+        fail every other attempt where the admissible size is steady), so an increment may
+        take many sub-steps (a large cycle jump against the wear cap) while no sub-step is
+        smaller than 2^-max_cutbacks of the increment. Returns the converged equilibrium, the advanced state, the final
         point status and the iteration counters. Raises :class:`ConvergenceError` when a
         sub-step of that smallest size still fails.
         """
@@ -271,6 +272,7 @@ class ContactSolver:
         origin, target = start.amplitudes, np.asarray(amplitudes, dtype=float)
         equilibrium, status = start, None
         done, level = 0.0, 0  # fraction of the increment solved; sub-step size 2^-level
+        streak = 0  # sub-steps solved in a row at this size
         while done < 1.0:
             reach = min(1.0, done + 0.5 ** level)
             sub_target = target if reach == 1.0 else origin + reach * (target - origin)
@@ -294,11 +296,14 @@ class ContactSolver:
                         f"{reason}")
                 stats.cutbacks += 1
                 level += 1
+                streak = 0
                 continue
             equilibrium, response = solved
             state, status = advance(state, response, self.law, cof_evolution=effects.cof_evolution,
                                     wear=effects.wear, cycle_jump=effects.cycle_jump)
             stats.substeps += 1
             done = reach
-            level = max(level - 1, 0)
+            streak += 1
+            if streak == 2:
+                level, streak = max(level - 1, 0), 0
         return equilibrium, state, status, stats
