@@ -11,7 +11,8 @@ increment to a :class:`Watchdog`, which asserts on the spot:
 * at most ``max_cutbacks`` cutbacks in any increment;
 
 and keeps the global energy account of :class:`contact.energy.EnergyMeter`: external work
-against stored energy + local frictional dissipation + wear release.
+plus the elastic-stick source against stored energy + local frictional dissipation + wear
+release (``Watchdog.energy_error``).
 
 Models are the shipped cylinder-on-plane scene, coarsened through scene overrides, and
 small 3D flat-on-flat blocks. Units: mm, N, MPa, mJ.
