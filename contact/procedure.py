@@ -169,8 +169,8 @@ def _verdict(history: list[CycleSummary], procedure: Procedure, stationary: bool
 
 def _loosening(history: list[CycleSummary], procedure: Procedure) -> bool:
     """Loosening is evident when, over the last ``loosening_window`` wear cycles, the clamp
-    force keeps falling without its rate decaying (second half at least half the first),
-    by a visible amount (0.1 % of the clamp force), while the stick area shrinks or the
+    force keeps falling without its rate decaying (second half at least 0.8 of the first),
+    by a visible amount (0.5 % of the clamp force), while the stick area shrinks or the
     whole contact slides."""
     wear_cycles = [c for c in history if c.phase == "wear" and c.clamp_force is not None]
     if len(wear_cycles) < procedure.loosening_window:
@@ -181,8 +181,8 @@ def _loosening(history: list[CycleSummary], procedure: Procedure) -> bool:
     middle = len(force) // 2
     first_rate = (force[0] - force[middle]) / middle
     second_rate = (force[middle] - force[-1]) / (len(force) - 1 - middle)
-    falling = second_rate > 0.0 and second_rate >= 0.5 * first_rate
-    visible = force[0] - force[-1] > 1e-3 * abs(force[0])
+    falling = second_rate > 0.0 and second_rate >= 0.8 * first_rate
+    visible = force[0] - force[-1] > 5e-3 * abs(force[0])
     stick_shrinks = stick[-1] < stick[0] - procedure.area_tolerance or stick[-1] <= procedure.area_tolerance
     return bool(falling and visible and stick_shrinks)
 

@@ -119,7 +119,7 @@ def check_energy(scene_path, overrides, cycles, increments) -> list[dict]:
     result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
                            cof_evolution=False, wear=True, observer=observer)
     work, stored = observer.energies
-    dissipation_global = work - stored - meter.wear_release
+    dissipation_global = work + meter.stick_source - stored - meter.wear_release
     area = model.assembly.structure.area
     worn_area = float(np.sum(result.state.gap * area))
     w_total = sum(model.law.wear_coefficients)
