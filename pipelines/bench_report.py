@@ -171,8 +171,9 @@ def drive(solver, state: ContactState, case: FlatOnFlat, *, label: str, points: 
 def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> tuple[dict, dict]:
     """Set up and run the case with the ``condensed`` or ``full`` solver: (summary, fields).
 
-    setup_s is the condensation (assemble + contact-space elimination) or the full-model
-    build. peak_rss_mb is the process's peak resident memory, meaningful when each run has
+    setup_s is the condensation (assemble, split into condense_s: coupling and Schur
+    complements of the bodies, and contact_space_s: the elimination to W, E, S_q) or the
+    full-model build. peak_rss_mb is the process's peak resident memory, meaningful when each run has
     its own process (as in :func:`main`).
     """
     from contact import full_model
@@ -182,10 +183,13 @@ def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> t
 
     case = flat_on_flat(points_per_side, increments_per_quarter=increments_per_quarter)
     start = time.perf_counter()
+    split = {}
     if solver == "condensed":
         structure = assemble(case.bodies, case.slave, case.master, loads=case.loads,
                              motions=case.motions).structure
+        split["condense_s"] = time.perf_counter() - start
         engine, dofs = ContactSolver(ContactSpace(structure), case.law), structure.n_dofs
+        split["contact_space_s"] = time.perf_counter() - start - split["condense_s"]
     elif solver == "full":
         model = full_model.build(case.bodies, case.slave, case.master, loads=case.loads,
                                  motions=case.motions)
@@ -195,7 +199,7 @@ def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> t
     setup = time.perf_counter() - start
     record, fields = drive(engine, case.initial_state(engine.n_points), case, label=solver,
                            points=engine.n_points, dofs=dofs, setup_time=setup)
-    summary = record.summary(case.cycle)
+    summary = record.summary(case.cycle) | split
     summary["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     if solver == "condensed":
         from contact.linear import solver_for
