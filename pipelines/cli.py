@@ -137,6 +137,8 @@ def build_parser() -> argparse.ArgumentParser:
                           help="probe point 'x,y[,z]' in mm (repeat; paper's P1, P2)")
     constant.add_argument("--json", action="store_true")
     constant.set_defaults(func=cmd_study)
+    from pipelines.accuracy import add_accuracy_parser
+    add_accuracy_parser(kinds)
     from mbs.cli import add_run_parser, add_sweep_parser
     from pipelines.fmu import add_export_fmu_parser
     add_export_fmu_parser(sub)

@@ -1,0 +1,96 @@
+"""Accuracy-versus-time study: errors against the reference, the recommendation rule, the CLI."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from pipelines import scene as scenes
+from pipelines.accuracy import (TOLERANCE, Run, accuracy_study, errors, knobs_for, pareto_front, recommend,
+                                setting_overrides)
+from pipelines.cli import main
+
+
+def _record(label, wall_time, worst, agrees=True, failure=None):
+    return {"label": label, "wall_time_s": wall_time, "worst_error": worst, "verdict_agrees": agrees,
+            "failure": failure, "within_tolerance": agrees and worst <= TOLERANCE}
+
+
+def test_recommendation_is_the_cheapest_run_within_two_percent():
+    records = [_record("reference", 10.0, 0.0), _record("coarse mesh", 2.0, 0.019),
+               _record("fewer increments", 3.0, 0.005), _record("soft kn", 1.0, 0.021),
+               _record("big jump", 0.5, 0.0, agrees=False), _record("stiff", 0.1, math.inf, failure="no")]
+    assert recommend(records)["label"] == "coarse mesh"
+    assert recommend(records, tolerance=0.01)["label"] == "fewer increments"
+    assert recommend([_record("a", 1.0, 0.5)]) is None
+
+
+def test_pareto_front_keeps_only_runs_no_other_beats_in_time_and_error():
+    records = [_record("reference", 10.0, 0.0), _record("a", 2.0, 0.019), _record("b", 3.0, 0.05),
+               _record("c", 1.0, 0.3), _record("failed", 0.1, math.inf, failure="no")]
+    assert [r["label"] for r in pareto_front(records)] == ["c", "a", "reference"]
+
+
+def test_cof_map_error_takes_the_nearest_point_of_a_different_mesh():
+    coarse = np.array([[0.0, 0.0], [1.0, 0.0]])
+    fine = np.array([[0.0, 0.0], [0.4, 0.0], [0.6, 0.0], [1.0, 0.0]])
+    reference = Run("reference", {}, (), values={"cof_rise": 0.5}, cof=np.array([0.2, 0.2, 0.4, 0.4]),
+                    coordinates=fine)
+    run = Run("coarse", {}, ("contact_size",), values={"cof_rise": 0.5}, cof=np.array([0.2, 0.5]),
+              coordinates=coarse)
+    # nearest coarse point of each fine point: 0, 0, 1, 1 → differences 0, 0, 0.1, 0.1
+    assert errors(run, reference)["cof_map"] == pytest.approx(np.sqrt(0.02 / 4) / 0.5)
+
+
+def test_cycle_jump_keeps_the_equivalent_cycles(coarse_cylinder):
+    scene = scenes.load(coarse_cylinder)
+    knobs, not_applicable = knobs_for(scene, quick=False)
+    jump = next(k for k in knobs if k.name == "cycle_jump")
+    assert jump.values[0] == 1000.0  # finest: the scene's J with its 2 wear cycles
+    overrides = setting_overrides(scene, {"cycle_jump": jump.values[-1]})
+    assert overrides["procedure.wear_cycles"] * overrides["procedure.cycle_jump"] == pytest.approx(2000.0)
+    assert {"craig_bampton_modes", "mbs_time_step", "cof_cycles"} <= set(not_applicable)
+
+
+def test_study_on_a_tiny_sweep_of_the_coarse_cylinder(coarse_cylinder):
+    study = accuracy_study(coarse_cylinder, quick=True,
+                           sweeps={"contact_size": [0.2, 0.4], "increments_per_cycle": [12, 6],
+                                   "normal_stiffness": [4.0e6], "critical_slip": [1.0e-3], "cycle_jump": [1000.0]})
+    reference, *others = study.records
+    assert reference["label"] == "reference" and reference["errors"]["max_wear_depth_mm"] == 0.0
+    assert reference["worst_error"] == 0.0 and reference["verdict_agrees"]
+    assert {r["label"] for r in others} >= {"contact_size=0.4", "increments_per_cycle=6"}
+    for record in others:
+        assert record["failure"] is None
+        assert set(record["errors"]) == {"max_wear_depth_mm", "slip_area_fraction"}
+        assert all(np.isfinite(list(record["errors"].values()))) and record["wall_time_s"] > 0
+    # fewer increments per cycle change the wear of a gross-slip scar: the error is seen
+    coarse_increments = next(r for r in others if r["label"] == "increments_per_cycle=6")
+    assert coarse_increments["errors"]["max_wear_depth_mm"] > 0.0
+    assert study.recommendation is not None and study.recommendation["worst_error"] <= TOLERANCE
+
+
+def test_cli_writes_plot_and_json(coarse_cylinder, tmp_path, capsys):
+    out = tmp_path / "acc"
+    code = main(["study", "accuracy", str(coarse_cylinder), "--quick", "--json", "--out", str(out),
+                 "--knob", "contact_size=0.2", "--knob", "increments_per_cycle=12,6",
+                 "--knob", "normal_stiffness=4e6", "--knob", "critical_slip=1e-3",
+                 "--set", "procedure.wear_cycles=1"])
+    assert code == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["base_overrides"] == {"procedure.wear_cycles": 1}
+    assert [r["label"] for r in printed["records"]] == ["reference", "increments_per_cycle=6"]
+    assert (out / "accuracy_cylinder_on_plane.png").stat().st_size > 10_000
+    assert json.loads((out / "accuracy_cylinder_on_plane.json").read_text())["scene"] == "cylinder_on_plane"
+
+
+def test_cli_bad_input_exits_2(coarse_cylinder, tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(coarse_cylinder.read_text().replace("critical_slip", "critcal_slip"))
+    assert main(["study", "accuracy", str(bad), "--out", str(tmp_path / "o")]) == 2
+    assert "critcal_slip" in capsys.readouterr().err
+    assert main(["study", "accuracy", str(tmp_path / "missing.toml")]) == 2
+    assert main(["study", "accuracy", str(coarse_cylinder), "--knob", "cof_cycles=5,10"]) == 2
+    assert "cof_cycles" in capsys.readouterr().err
+    assert main(["study", "accuracy", str(coarse_cylinder), "--knob", "contact_size=-1"]) == 2
