@@ -24,7 +24,10 @@ Craig–Bampton modes and the multibody time step belong to the multibody model;
 scenes list them as not applicable. Each run records its wall time and the CPU time of this
 process (build and condensation plus the procedure, s). The cost that ranks runs (Pareto front,
 recommendation) is the CPU time: on a shared machine the wall time of one setting varied 5x
-between two identical runs, the CPU time far less.
+between two identical runs, the CPU time far less. Runs use one BLAS thread (threadpoolctl, when
+installed): the contact-space systems are small and dense, and two OpenBLAS threads on a loaded
+2-core machine spin against each other (a 2.6 s run took 27 s of CPU), which made the costs
+depend on the neighbours instead of the settings.
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ import math
 import sys
 import time
 import tomllib
+from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable
@@ -41,11 +45,16 @@ from typing import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
+try:
+    from threadpoolctl import threadpool_limits
+except ImportError:  # the same answers, costs measured with the default BLAS threads
+    threadpool_limits = None
+
 from contact import procedure
 from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from pipelines import scene as scenes
-from pipelines.build import build
+from pipelines.build import build, make_mesh
 from reduction.errors import InputError
 
 TOLERANCE = 0.02
@@ -213,10 +222,11 @@ def run_setting(scene_path: Path, overrides: dict, label: str, settings: dict, v
     record = Run(label, dict(settings), varied)
     clock, cpu = time.perf_counter(), time.process_time()
     try:
-        model = build(scene)
-        solver = ContactSolver(ContactSpace(model.assembly.structure), model.law, model.settings)
-        result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
-                               cof_evolution="cof_evolution" in scene.effects, wear="wear" in scene.effects)
+        with threadpool_limits(limits=1, user_api="blas") if threadpool_limits else nullcontext():
+            model = build(scene)
+            solver = ContactSolver(ContactSpace(model.assembly.structure), model.law, model.settings)
+            result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
+                                   cof_evolution="cof_evolution" in scene.effects, wear="wear" in scene.effects)
     except ConvergenceError as error:
         record.wall_time_s = time.perf_counter() - clock
         record.cpu_time_s = time.process_time() - cpu
@@ -302,6 +312,18 @@ def _combined(knobs: list[Knob], records: list[dict], reference: dict) -> dict:
     return settings
 
 
+def _check_contact_sizes(scene_path: Path, scene: scenes.Scene, base: dict, knob: Knob) -> None:
+    """Generate the meshes of every swept contact size first: a size the mesh generator rejects
+    stops the study before the first run, not after the reference."""
+    for value in knob.values:
+        sized = scenes.load(scene_path, {**base, **setting_overrides(scene, {"contact_size": value})})
+        for name, body in sized.data["bodies"].items():
+            try:
+                make_mesh(body["mesh"], f"bodies.{name}.mesh", scene_path.parent)
+            except InputError as error:
+                raise InputError(f"contact_size {value:g} mm: {error}") from None
+
+
 def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: dict | None = None,
                    sweeps: dict | None = None, on_run: Callable[[dict], None] | None = None) -> Study:
     """Sweep every applicable knob of the scene one at a time against the finest setting.
@@ -324,6 +346,8 @@ def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: di
             raise InputError(f"knob '{name}' needs at least one value")
         by_name[name] = replace(by_name[name], values=by_name[name].ordered(values))
     knobs = [by_name[k.name] for k in knobs]
+    if "contact_size" in by_name:
+        _check_contact_sizes(scene_path, scene, base, by_name["contact_size"])
     reference_settings = {k.name: k.values[0] for k in knobs}
 
     def execute(settings, varied):

@@ -94,3 +94,13 @@ def test_cli_bad_input_exits_2(coarse_cylinder, tmp_path, capsys):
     assert main(["study", "accuracy", str(coarse_cylinder), "--knob", "cof_cycles=5,10"]) == 2
     assert "cof_cycles" in capsys.readouterr().err
     assert main(["study", "accuracy", str(coarse_cylinder), "--knob", "contact_size=-1"]) == 2
+
+
+def test_a_contact_size_the_mesh_generator_rejects_stops_before_any_run(tmp_path, capsys):
+    from pathlib import Path
+    beam = Path(__file__).resolve().parents[2] / "examples" / "double_beam_low_slip.toml"
+    # half the beam width (15 mm) is not a multiple of 4 mm
+    assert main(["study", "accuracy", str(beam), "--knob", "contact_size=3,4", "--out", str(tmp_path)]) == 2
+    error = capsys.readouterr().err
+    assert "contact_size 4 mm" in error and "multiples" in error
+    assert not list(tmp_path.iterdir())
