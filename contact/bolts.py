@@ -96,21 +96,25 @@ class BoltSet:
         """ε (n_bolts,) mm from the control DOFs of an equilibrium."""
         return self._control_vectors(space) @ control
 
-    def lock(self, space, equilibrium):
-        """Lock every bolt at its current length; returns (locked set, space, amplitudes).
+    def lock_at(self, space, elongation: np.ndarray):
+        """Lock every bolt at the elongation ε_lock (mm); returns (locked set, locked space).
 
-        The locked space has the bolts' axial stiffness in its control block; the pretension
-        patterns' amplitudes become 1 − k_b·ε_lock/F so the equilibrium is unchanged.
+        The locked space has the bolts' axial stiffness in its control block.
         """
         control_vectors = self._control_vectors(space)
-        elongation = control_vectors @ equilibrium.control
         extra = np.einsum("b,bi,bj->ij", self.stiffness, control_vectors, control_vectors)
-        locked = BoltSet(self.bolts, self.vectors, self.patterns, elongation)
+        locked = BoltSet(self.bolts, self.vectors, self.patterns, np.asarray(elongation, dtype=float))
+        return locked, space.with_control_stiffness(extra)
+
+    def locked_amplitudes(self, space, equilibrium) -> np.ndarray:
+        """Pattern amplitudes after locking: each pretension pattern becomes 1 − k_b·ε_lock/F,
+        so the equilibrium at the moment of locking is unchanged."""
         amplitudes = equilibrium.amplitudes.copy()
         names = space.structure.patterns
         for k, pattern in enumerate(self.patterns):
-            amplitudes[names.index(pattern)] = 1.0 - self.stiffness[k] * elongation[k] / self.pretension[k]
-        return locked, space.with_control_stiffness(extra), amplitudes
+            amplitudes[names.index(pattern)] = (1.0 - self.stiffness[k] * self.locked_elongation[k]
+                                                / self.pretension[k])
+        return amplitudes
 
     def forces(self, space, equilibrium) -> np.ndarray:
         """Axial bolt forces T (n_bolts,) N at an equilibrium."""

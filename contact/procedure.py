@@ -187,21 +187,45 @@ def _loosening(history: list[CycleSummary], procedure: Procedure) -> bool:
     return bool(falling and visible and stick_shrinks)
 
 
+@dataclass
+class Snapshot:
+    """What the procedure needs to continue after a checkpoint (all between two cycles).
+
+    phase_index: 0 COF phase, 1 wear phase; cycles_in_phase: cycles of it completed.
+    history: the last cycles (enough for the loosening window; only the last one keeps its
+    per-point fields). locked_elongation: ε_lock of the bolts (mm), or None.
+    """
+
+    cycle_number: int
+    phase_index: int
+    cycles_in_phase: int
+    quiet_cycles: int
+    equivalent: float
+    nominal_area: float
+    initial_clamp: float | None
+    locked_elongation: np.ndarray | None
+    cof_initial: np.ndarray
+    state: ContactState
+    equilibrium: Equilibrium
+    history: list
+
+
 def run(solver: ContactSolver, state: ContactState, program: LoadProgram, procedure: Procedure, *,
         cof_evolution: bool, wear: bool, observer: Observer | None = None,
-        start: Equilibrium | None = None) -> RunResult:
+        start: Equilibrium | None = None, checkpoint=None, checkpoint_every: int = 0,
+        resume: Snapshot | None = None) -> RunResult:
     """Run the procedure. Effects not asked for (``cof_evolution``, ``wear``) are never computed.
 
     Bolts of the structure carry their pretension in the preload and are locked at their
     length before the first cycle; the clamp force is the sum of the bolt forces.
+    ``checkpoint(snapshot)`` is called every ``checkpoint_every`` cycles; ``resume`` continues
+    from such a snapshot. Cached factorisations are dropped at every checkpoint boundary, so a
+    resumed run repeats the uninterrupted one bit for bit.
     """
     observer = observer or Observer()
     law = solver.law
     area = solver.area
-    cof_initial = state.cof.copy()
-    equilibrium = start or solver.initial_equilibrium()
     clock = time.perf_counter()
-
     bolts = solver.space.structure.bolts
 
     def bolt_forces(eq):
@@ -215,34 +239,53 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
                                            bolt_forces(equilibrium)))
         return status
 
-    observer.phase("preload", 0)
-    status = None
-    for k in range(1, procedure.preload_increments + 1):
-        status = step(program.preload(k / procedure.preload_increments), Effects(), "preload", 0,
-                      k / procedure.preload_increments)
-    closed = equilibrium.forces.reshape(solver.n_points, -1)[:, 0] > 0.0
-    nominal_area = float(area[closed].sum())
-    if bolts is not None:
-        bolts, space, amplitudes = bolts.lock(solver.space, equilibrium)
+    def lock(elongation):
+        nonlocal bolts, solver, program
+        bolts, space = bolts.lock_at(solver.space, elongation)
         solver = ContactSolver(space, law, solver.settings)
-        equilibrium = replace(equilibrium, amplitudes=amplitudes)
-        program = replace(program, held={p: amplitudes[program.patterns.index(p)] for p in bolts.patterns})
-    initial_clamp = None if bolts is None else float(bolt_forces(equilibrium).sum())
 
-    history: list[CycleSummary] = []
-    cycle_number = 0
+    if resume is None:
+        cof_initial = state.cof.copy()
+        equilibrium = start or solver.initial_equilibrium()
+        observer.phase("preload", 0)
+        for k in range(1, procedure.preload_increments + 1):
+            step(program.preload(k / procedure.preload_increments), Effects(), "preload", 0,
+                 k / procedure.preload_increments)
+        closed = equilibrium.forces.reshape(solver.n_points, -1)[:, 0] > 0.0
+        nominal_area = float(area[closed].sum())
+        if bolts is not None:
+            lock(bolts.elongation(solver.space, equilibrium.control))
+            equilibrium = replace(equilibrium, amplitudes=bolts.locked_amplitudes(solver.space, equilibrium))
+        history: list[CycleSummary] = []
+        cycle_number, first_phase, done_in_phase, quiet_cycles, equivalent = 0, 0, 0, 0, 0.0
+        initial_clamp = None if bolts is None else float(bolt_forces(equilibrium).sum())
+    else:
+        cof_initial, state, equilibrium = resume.cof_initial, resume.state, resume.equilibrium
+        nominal_area, initial_clamp, history = resume.nominal_area, resume.initial_clamp, list(resume.history)
+        cycle_number, first_phase = resume.cycle_number, resume.phase_index
+        done_in_phase, quiet_cycles, equivalent = resume.cycles_in_phase, resume.quiet_cycles, resume.equivalent
+        if bolts is not None:
+            lock(resume.locked_elongation)
+    if bolts is not None:
+        program = replace(program, held={p: equilibrium.amplitudes[program.patterns.index(p)]
+                                         for p in bolts.patterns})
+
     stationary = False
     phases = [("cof", procedure.cof_cycles, Effects(cof_evolution=cof_evolution)),
               ("wear", procedure.wear_cycles if wear else 0,
                Effects(cof_evolution=cof_evolution and procedure.cof_during_wear, wear=wear,
                        cycle_jump=procedure.cycle_jump))]
-    equivalent = 0.0
-    for phase, n_cycles, effects in phases:
-        if n_cycles <= 0:
+    keep = max(procedure.loosening_window, 1)
+    for phase_index, (phase, n_cycles, effects) in enumerate(phases):
+        if phase_index < first_phase or n_cycles <= 0:
             continue
+        resuming_this_phase = phase_index == first_phase and done_in_phase > 0
+        start_count = done_in_phase if resuming_this_phase else 0
+        if not resuming_this_phase:
+            quiet_cycles = 0
         observer.phase(phase, n_cycles)
-        quiet_cycles = 0
-        for _ in range(n_cycles):
+        finished = False
+        for count in range(start_count, n_cycles):
             cycle_number += 1
             n_inc = procedure.increments_per_cycle
             start_slip = state.slip_vector.copy()
@@ -276,13 +319,22 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
                                             cof_initial, law.cof_max, procedure.area_tolerance)
             summary.figures["clamp_force_N"] = summary.clamp_force
             history.append(summary)
+            del history[:-keep]
             observer.cycle(summary)
             slipped = summary.figures["slip_area_fraction"] > 0.0
             quiet_cycles = 0 if slipped else quiet_cycles + 1
             if quiet_cycles >= procedure.stationary_window:
                 stationary = True
-                break
-            if phase == "wear" and _loosening(history, procedure):
+            elif phase == "wear" and _loosening(history, procedure):
+                finished = True
+            if checkpoint_every and cycle_number % checkpoint_every == 0:
+                solver.forget_cached_factorisations()
+                if checkpoint is not None and not (stationary or finished or count + 1 == n_cycles):
+                    checkpoint(Snapshot(cycle_number, phase_index, count + 1, quiet_cycles, equivalent,
+                                        nominal_area, initial_clamp,
+                                        None if bolts is None else bolts.locked_elongation,
+                                        cof_initial, state, equilibrium, list(history)))
+            if stationary or finished:
                 break
         if stationary:
             break

@@ -16,6 +16,7 @@ import numpy as np
 
 from contact.law import (ContactLaw, ContactState, Response, Status, advance, evaluate,
                          wear_increment)
+from contact import linear
 from contact.linear import solve_newton_system, tangent_blocks
 from contact.structure import ContactSpace
 
@@ -112,6 +113,11 @@ class ContactSolver:
         # kilometres away instead of reporting the loss of tangential equilibrium.
         self.control_stiffness = space.Sq - self.rigid_modes @ (self.rigid_modes.T @ space.Sq
                                                                 @ self.rigid_modes) @ self.rigid_modes.T
+
+    def forget_cached_factorisations(self) -> None:
+        """Drop the factorisations the linear solver keeps across increments (a checkpoint
+        boundary: a resumed run then starts from the same solver state as an uninterrupted one)."""
+        linear._solvers.pop(self.space, None)
 
     def initial_equilibrium(self) -> Equilibrium:
         n_patterns = len(self.space.structure.patterns)

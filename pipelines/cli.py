@@ -23,7 +23,7 @@ def cmd_run(args) -> int:
     from pipelines.run import run_scene
 
     loaded = scene.load(args.scene)
-    outcome = run_scene(loaded, args.out, progress=not args.quiet)
+    outcome = run_scene(loaded, args.out, progress=not args.quiet, resume=args.resume)
     if args.json:
         print(_json(outcome.summary))
     else:
@@ -109,6 +109,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", required=True, help="output directory")
     run.add_argument("--json", action="store_true", help="print the global figures as JSON")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--resume", action="store_true",
+                     help="continue an interrupted run from DIR/checkpoint.h5")
     run.set_defaults(func=cmd_run)
     validate = sub.add_parser("validate", help="validation against closed forms and reference models")
     validate.add_argument("--json", action="store_true")

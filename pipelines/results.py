@@ -26,6 +26,8 @@ after an interruption.
 from __future__ import annotations
 
 import json
+import os
+import shutil
 from pathlib import Path
 
 import h5py
@@ -33,6 +35,8 @@ import numpy as np
 
 from contact.energy import EnergyMeter
 from contact.procedure import PHASES, CycleSummary, IncrementRecord, Observer
+from pipelines.checkpoint import read_snapshot, write_snapshot
+from reduction.errors import InputError
 
 FORMAT = "fretwork-results"
 FORMAT_VERSION = 1
@@ -69,18 +73,29 @@ def _append(group: h5py.Group, name: str, row, units: str) -> None:
 
 
 class ResultsWriter(Observer):
-    """Observer that writes increments and cycles to HDF5 and reports progress."""
+    """Observer that writes increments and cycles to HDF5 and reports progress.
+
+    ``checkpoint(snapshot)`` copies the results so far, with the snapshot, to
+    ``checkpoint.h5`` beside the results (atomic rename); :meth:`resume` reopens a run there.
+    """
 
     def __init__(self, path: Path, model, space, *, record_every: int = 1, progress=None,
-                 track_energy: bool = True):
+                 track_energy: bool = True, resume: bool = False):
         self.final_path = Path(path)
         self.part_path = self.final_path.with_suffix(".h5.part")
-        self.file = h5py.File(self.part_path, "w")
+        self.checkpoint_path = self.final_path.with_name("checkpoint.h5")
         self.model = model
         self.record_every = record_every
         self.progress = progress
         self.meter = EnergyMeter(space, model.law) if track_energy else None
         self.labels = model.assembly.structure.labels
+        self._rows: dict[str, list] = {}
+        self._units: dict[str, str] = {}
+        self.snapshot = None
+        if resume:
+            self._reopen_from_checkpoint()
+            return
+        self.file = h5py.File(self.part_path, "w")
         root = self.file
         root.attrs.update(fretwork_format=FORMAT, format_version=FORMAT_VERSION,
                           scene_name=model.scene.name, complete=False,
@@ -95,8 +110,34 @@ class ResultsWriter(Observer):
             points.create_dataset(name, data=data).attrs["units"] = units
         root.create_group("increments")
         root.create_group("cycles")
-        self._rows: dict[str, list] = {}
-        self._units: dict[str, str] = {}
+
+    def _reopen_from_checkpoint(self) -> None:
+        if not self.checkpoint_path.is_file():
+            raise InputError(f"nothing to resume: {self.checkpoint_path} does not exist")
+        try:
+            with h5py.File(self.checkpoint_path, "r") as file:
+                if file.attrs.get("scene_toml", "") != (self.model.scene.path.read_text()
+                                                         if self.model.scene.path else ""):
+                    raise InputError(f"{self.checkpoint_path} belongs to a different scene; "
+                                     "resume with the scene file the run started from")
+                self.snapshot = read_snapshot(file["checkpoint"], self.meter)
+        except OSError as error:
+            raise InputError(f"{self.checkpoint_path} cannot be read: {error}") from None
+        shutil.copyfile(self.checkpoint_path, self.part_path)
+        self.file = h5py.File(self.part_path, "a")
+        del self.file["checkpoint"]
+
+    def checkpoint(self, snapshot) -> None:
+        """Write ``checkpoint.h5`` atomically: results so far + ``/checkpoint`` snapshot."""
+        self._flush_increments()
+        self.file.flush()
+        self.file.close()
+        temporary = self.checkpoint_path.with_suffix(".h5.tmp")
+        shutil.copyfile(self.part_path, temporary)
+        with h5py.File(temporary, "a") as file:
+            write_snapshot(file.create_group("checkpoint"), snapshot, self.meter)
+        os.replace(temporary, self.checkpoint_path)
+        self.file = h5py.File(self.part_path, "a")
 
     def phase(self, name, n_cycles):
         if self.progress is not None:
@@ -183,6 +224,7 @@ class ResultsWriter(Observer):
         self.file.attrs["complete"] = True
         self.file.close()
         self.part_path.replace(self.final_path)
+        self.checkpoint_path.unlink(missing_ok=True)
         return self.final_path
 
     def abort(self) -> None:

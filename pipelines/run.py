@@ -16,13 +16,14 @@ from pipelines.paraview import write_final_vtu, write_interface_series
 from pipelines.plots import plot_results
 from pipelines.results import ResultsWriter
 from pipelines.scene import Scene
+from reduction.errors import InputError
 
 
 class ProgressBar:
     """tqdm bar over the load cycles of all phases, with the current slip and stick areas."""
 
-    def __init__(self, total_cycles: int, enabled: bool, label: str):
-        self.bar = tqdm(total=total_cycles, unit="cycle", disable=not enabled, desc=label,
+    def __init__(self, total_cycles: int, enabled: bool, label: str, done: int = 0):
+        self.bar = tqdm(total=total_cycles, initial=done, unit="cycle", disable=not enabled, desc=label,
                         dynamic_ncols=True, leave=True)
 
     def phase(self, name, n_cycles):
@@ -51,7 +52,8 @@ class Outcome:
     stage_times: dict = field(default_factory=dict)
 
 
-def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool = True) -> Outcome:
+def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool = True,
+              resume: bool = False) -> Outcome:
     stage_times = {}
     clock = time.perf_counter()
     space = ContactSpace(model.assembly.structure)
@@ -60,16 +62,22 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     effects = model.scene.effects
     proc = model.procedure
     total = proc.cof_cycles + (proc.wear_cycles if "wear" in effects else 0)
+    settings = model.scene.section("procedure")
+    if resume and (out_dir / "results.h5").is_file() and not (out_dir / "checkpoint.h5").is_file():
+        raise InputError(f"{out_dir / 'results.h5'} is complete: there is nothing to resume")
     out_dir.mkdir(parents=True, exist_ok=True)
-    bar = ProgressBar(total, progress, model.scene.name)
-    writer = ResultsWriter(out_dir / "results.h5", model, space,
-                           record_every=model.scene.section("procedure").get("record_every", 1),
-                           progress=bar)
+    writer = ResultsWriter(out_dir / "results.h5", model, space, record_every=settings.get("record_every", 1),
+                           resume=resume)
+    bar = ProgressBar(total, progress, model.scene.name,
+                      done=writer.snapshot.cycle_number if writer.snapshot else 0)
+    writer.progress = bar
     clock = time.perf_counter()
     try:
         result = procedure.run(solver, model.initial_state(), model.program, proc,
                                cof_evolution="cof_evolution" in effects, wear="wear" in effects,
-                               observer=writer)
+                               observer=writer, checkpoint=writer.checkpoint,
+                               checkpoint_every=settings.get("checkpoint_every", 10),
+                               resume=writer.snapshot)
     except (ConvergenceError, KeyboardInterrupt):
         writer.abort()
         bar.close()
@@ -82,15 +90,21 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     write_final_vtu(path, out_dir / "interface_final.vtu")
     summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
                **result.figures}
+    if writer.snapshot is not None:
+        summary["resumed_from_cycle"] = writer.snapshot.cycle_number
     return Outcome(summary, path, written, stage_times)
 
 
-def run_scene(scene: Scene, out_dir: str | Path, *, progress: bool = True, plots: bool = True) -> Outcome:
-    """Build the scene's model and run it into ``out_dir``; see :func:`run_model`."""
+def run_scene(scene: Scene, out_dir: str | Path, *, progress: bool = True, plots: bool = True,
+              resume: bool = False) -> Outcome:
+    """Build the scene's model and run it into ``out_dir``; see :func:`run_model`.
+
+    resume: continue from ``out_dir/checkpoint.h5`` (written every ``checkpoint_every`` cycles).
+    """
     clock = time.perf_counter()
     model = build(scene)
     build_time = time.perf_counter() - clock
-    outcome = run_model(model, Path(out_dir), progress=progress, plots=plots)
+    outcome = run_model(model, Path(out_dir), progress=progress, plots=plots, resume=resume)
     outcome.stage_times = {"build_and_condense_s": build_time, **outcome.stage_times}
     outcome.summary["wall_time_s"] = sum(outcome.stage_times.values())
     return outcome

@@ -99,6 +99,7 @@ SCHEMA = {
         "loosening_window": (int, False, _integer_at_least(3), "cycles of falling clamp force"),
         "max_cutbacks": (int, False, _integer_at_least(0), "halvings of a failing increment"),
         "record_every": (int, False, _integer_at_least(1), "store fields every n cycles"),
+        "checkpoint_every": (int, False, _integer_at_least(0), "write checkpoint.h5 every n cycles (0: never)"),
     },
 }
 PATTERN_KEYS = {

@@ -1,0 +1,100 @@
+"""Checkpoints of a contact run: the results so far plus everything needed to continue.
+
+A checkpoint is a complete copy of the results file with a ``/checkpoint`` group holding the
+procedure's :class:`contact.procedure.Snapshot` and the energy meter's accumulators. It is
+written under a temporary name and renamed, so ``checkpoint.h5`` is always whole: a run
+killed at any moment resumes from the last complete checkpoint.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import fields
+
+import h5py
+
+from contact.law import ContactState
+from contact.procedure import CycleSummary, Snapshot
+from contact.solver import Equilibrium
+
+SUMMARY_ARRAYS = ("pressure", "shear", "cof", "max_utilised_cof", "max_shear", "status", "slip_range",
+                  "dissipation_in_cycle")
+
+
+def _write_state(group: h5py.Group, state: ContactState) -> None:
+    for item in fields(ContactState):
+        value = getattr(state, item.name)
+        if value is not None:
+            group.create_dataset(item.name, data=value)
+
+
+def _read_state(group: h5py.Group) -> ContactState:
+    return ContactState(**{item.name: group[item.name][()] if item.name in group else None
+                           for item in fields(ContactState)})
+
+
+def write_snapshot(group: h5py.Group, snapshot: Snapshot, meter) -> None:
+    """Store ``snapshot`` and the energy meter (or None) in ``group``."""
+    scalars = {name: getattr(snapshot, name) for name in
+               ("cycle_number", "phase_index", "cycles_in_phase", "quiet_cycles", "equivalent",
+                "nominal_area", "initial_clamp")}
+    group.attrs["scalars"] = json.dumps(scalars)
+    group.create_dataset("cof_initial", data=snapshot.cof_initial)
+    if snapshot.locked_elongation is not None:
+        group.create_dataset("locked_elongation", data=snapshot.locked_elongation)
+    _write_state(group.create_group("state"), snapshot.state)
+    equilibrium = group.create_group("equilibrium")
+    for item in fields(Equilibrium):
+        equilibrium.create_dataset(item.name, data=getattr(snapshot.equilibrium, item.name))
+    history = group.create_group("history")
+    history.attrs["entries"] = json.dumps([{"cycle": c.cycle, "phase": c.phase,
+                                            "equivalent_cycles": c.equivalent_cycles,
+                                            "clamp_force": c.clamp_force, "figures": c.figures}
+                                           for c in snapshot.history])
+    last = snapshot.history[-1]
+    for name in SUMMARY_ARRAYS:
+        history.create_dataset(name, data=getattr(last, name))
+    if meter is not None:
+        energy = group.create_group("energy")
+        energy.attrs["sums"] = json.dumps({"external_work": meter.external_work,
+                                           "wear_release": meter.wear_release,
+                                           "stick_source": meter.stick_source})
+        for name in ("_displacement", "_forces", "_gap"):
+            value = getattr(meter, name)
+            if value is not None:
+                energy.create_dataset(name, data=value)
+        if meter._stick is not None:
+            for k, value in enumerate(meter._stick):
+                energy.create_dataset(f"_stick{k}", data=value)
+            energy.attrs["stick_items"] = len(meter._stick)
+
+
+def read_snapshot(group: h5py.Group, meter) -> Snapshot:
+    """The snapshot stored by :func:`write_snapshot`; restores ``meter`` in place."""
+    scalars = json.loads(group.attrs["scalars"])
+    state = _read_state(group["state"])
+    equilibrium = Equilibrium(**{item.name: group["equilibrium"][item.name][()] for item in fields(Equilibrium)})
+    entries = json.loads(group["history"].attrs["entries"])
+    history = []
+    for k, entry in enumerate(entries):
+        last = k == len(entries) - 1
+        arrays = {name: group["history"][name][()] if last else None for name in SUMMARY_ARRAYS}
+        summary = CycleSummary(cycle=entry["cycle"], phase=entry["phase"],
+                               equivalent_cycles=entry["equivalent_cycles"], state=state if last else None,
+                               clamp_force=entry["clamp_force"], **arrays)
+        summary.figures = entry["figures"]
+        history.append(summary)
+    if meter is not None and "energy" in group:
+        energy = group["energy"]
+        for name, value in json.loads(energy.attrs["sums"]).items():
+            setattr(meter, name, value)
+        for name in ("_displacement", "_forces", "_gap"):
+            setattr(meter, name, energy[name][()] if name in energy else None)
+        if "stick_items" in energy.attrs:
+            meter._stick = tuple(energy[f"_stick{k}"][()] for k in range(energy.attrs["stick_items"]))
+    return Snapshot(cof_initial=group["cof_initial"][()],
+                    locked_elongation=group["locked_elongation"][()] if "locked_elongation" in group else None,
+                    state=state, equilibrium=equilibrium, history=history, **scalars)
+
+
+__all__ = ["write_snapshot", "read_snapshot"]
