@@ -68,7 +68,7 @@ MULTIBODY_KNOBS = {
 }
 # Caps of the base run's cycle counts (the cycle jump is kept: raising it makes explicit
 # wear unstable): a study runs the scene a dozen times.
-CYCLE_CAPS = {False: {"wear_cycles": 10, "cof_cycles": 40}, True: {"wear_cycles": 4, "cof_cycles": 10}}
+CYCLE_CAPS = {False: {"wear_cycles": 20, "cof_cycles": 40}, True: {"wear_cycles": 4, "cof_cycles": 10}}
 
 
 @dataclass(frozen=True)
@@ -139,7 +139,10 @@ def _halvings(value, count, minimum):
 
 
 def knobs_for(scene: scenes.Scene, quick: bool) -> tuple[list[Knob], dict]:
-    """The knobs that apply to ``scene`` with their default sweeps, and those that do not (why)."""
+    """The knobs that apply to ``scene`` with their default sweeps, and those that do not (why).
+
+    The sweeps start at the scene's own values; pass the scene with the study's base overrides.
+    """
     data = scene.data
     proc, contact = data.get("procedure", {}), data["contact"]
     defaults = procedure.Procedure()
@@ -163,7 +166,7 @@ def knobs_for(scene: scenes.Scene, quick: bool) -> tuple[list[Knob], dict]:
     knobs.append(Knob("critical_slip", "critical slip γ_crit, mm",
                       (gamma,) + tuple(gamma * 10 ** k for k in range(1, count)) if quick else
                       (gamma / 10, gamma, gamma * 10), False))
-    wear_cycles = _capped(proc, "wear_cycles", quick, defaults.wear_cycles)
+    wear_cycles = proc.get("wear_cycles", defaults.wear_cycles)
     if "wear" in scene.effects and wear_cycles > 0:
         jump = proc.get("cycle_jump", defaults.cycle_jump)
         equivalent = wear_cycles * jump
@@ -171,7 +174,7 @@ def knobs_for(scene: scenes.Scene, quick: bool) -> tuple[list[Knob], dict]:
                           tuple(equivalent / n for n in _halvings(wear_cycles, count, 1)), False))
     else:
         not_applicable["cycle_jump"] = "the scene has no wear phase"
-    cof_cycles = _capped(proc, "cof_cycles", quick, defaults.cof_cycles)
+    cof_cycles = proc.get("cof_cycles", defaults.cof_cycles)
     if "cof_evolution" in scene.effects and cof_cycles > 0:
         knobs.append(Knob("cof_cycles", "COF-phase length, cycles", _halvings(cof_cycles, count, 1), True))
     else:
@@ -329,7 +332,7 @@ def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: di
     """Sweep every applicable knob of the scene one at a time against the finest setting.
 
     overrides: scene overrides applied to every run ("procedure.cof_cycles": 10, ...), after the
-    study's cycle caps (wear ≤ 10, COF ≤ 40 cycles; quick: ≤ 4 and ≤ 10, two values per knob).
+    study's cycle caps (wear ≤ 20, COF ≤ 40 cycles; quick: ≤ 4 and ≤ 10, two values per knob).
     sweeps: knob name → values replacing its default sweep. on_run: called with each record.
     """
     scene_path = Path(scene_path)

@@ -1,7 +1,7 @@
 """Accuracy versus time on the shipped scenes (`make bench`): Pareto plots and recommended settings.
 
 Writes results/bench/accuracy/accuracy_<scene>.{png,json}. The cylinder runs the default study
-(wear phase capped at 10 simulated cycles); the double beam is slow, so it runs the quick study
+(wear ≤ 20, COF ≤ 40 simulated cycles); the double beam is slow, so it runs the quick study
 on coarse pads (contact size 3, 4, 6 mm) with 10 COF and 4 wear cycles.
 """
 
