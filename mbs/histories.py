@@ -19,8 +19,8 @@ ENERGY_SAMPLES = 201
 class RunHistories:
     """Fixed-step histories of one run (rows = samples at ``time``).
 
-    Per counterweight c (first axis of every cw_* array, c = 0 on journal-1 side, 1 on journal-2
-    side), all vectors in the CW local frame (x tangential, y radial out, z crank axis):
+    Per counterweight c (first axis of every cw_* array; throw k carries c = 2k on its journal-1
+    side and c = 2k + 1 on its journal-2 side; "2" below is the number of CWs), all vectors in the CW local frame (x tangential, y radial out, z crank axis):
     cw_interface_displacement (2, n, 3) mm and cw_interface_rotation (2, n, 3) rad: CW
     interface relative to the web; cw_interface_force (2, n, 3) N and cw_interface_moment
     (2, n, 3) N mm: load the web applies to the CW at its interface (exudyn's joint reaction,
@@ -93,10 +93,11 @@ def collect_histories(mbs, sensors, reduced: ReducedCounterweight, energy: bool,
     keep = np.concatenate([[True], np.diff(spin[:, 0]) > 0.5 * np.median(np.diff(spin[:, 0]))])
     spin = spin[keep]
     time = spin[:, 0]
-    data = {key: np.stack([_stored(mbs, sensors[(key, c)])[keep, 1:] for c in range(2)])
+    n_cw = sum(1 for key in sensors if isinstance(key, tuple) and key[0] == "q")
+    data = {key: np.stack([_stored(mbs, sensors[(key, c)])[keep, 1:] for c in range(n_cw)])
             for key in ("q", "q_t", "q_tt", "rotation", "acceleration", "omega", "alpha", "velocity",
                         "joint_displacement", "joint_rotation", "joint_force", "joint_moment")}
-    rotation = data["rotation"].reshape(2, -1, 3, 3)
+    rotation = data["rotation"].reshape(n_cw, -1, 3, 3)
     to_local = lambda vectors: np.einsum("csji,csj->csi", rotation, vectors)  # noqa: E731 (A^T v per sample)
     tip_shapes = reduced.wing_tip_axial_shapes()
     energy_time = total_energy = None
@@ -104,7 +105,7 @@ def collect_histories(mbs, sensors, reduced: ReducedCounterweight, energy: bool,
         picked = np.unique(np.linspace(0, len(time) - 1, ENERGY_SAMPLES).astype(int))
         energy_time = time[picked]
         total_energy = sum(_stored(mbs, s)[keep][picked, 1] for s in sensors["kinetic"] + sensors["potential"])
-        for c in range(2):
+        for c in range(n_cw):
             total_energy = total_energy + counterweight_energy(
                 reduced, *(data[key][c][picked] for key in ("rotation", "velocity", "omega", "q", "q_t")))
     return RunHistories(

@@ -43,10 +43,19 @@ class SimulationError(RuntimeError):
 COUNTERWEIGHT_ROTATION = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
-def _half_throw_inertia(throw: CrankThrowParams, side: float) -> eu.RigidBodyInertia:
-    """Journal + web + half pin of one side (side = -1 journal 1, +1 journal 2), node at web centre."""
-    journal = eu.InertiaCylinder(throw.density, throw.journal_length, throw.journal_radius, axis=2).Translated(
-        [0.0, 0.0, side * 0.5 * (throw.web_thickness + throw.journal_length)])
+def _rotation_z(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _half_throw_inertia(throw: CrankThrowParams, side: float, journal_fraction: float = 1.0) -> eu.RigidBodyInertia:
+    """Journal + web + half pin of one side (side = -1 journal 1, +1 journal 2), node at web centre.
+
+    journal_fraction: share of the main journal this half-throw carries (1/2 where a neighbouring
+    throw shares the journal)."""
+    journal_length = journal_fraction * throw.journal_length
+    journal = eu.InertiaCylinder(throw.density, journal_length, throw.journal_radius, axis=2).Translated(
+        [0.0, 0.0, side * 0.5 * (throw.web_thickness + journal_length)])
     web_length = throw.counterweight_radius + throw.crank_radius + throw.pin_radius
     web = eu.InertiaCuboid(throw.density, [web_length, throw.web_width, throw.web_thickness]).Translated(
         [0.5 * web_length - throw.counterweight_radius, 0.0, 0.0])
@@ -57,64 +66,103 @@ def _half_throw_inertia(throw: CrankThrowParams, side: float) -> eu.RigidBodyIne
 
 @dataclass
 class _Items:
-    """Item numbers of the exudyn system, filled while the model is built."""
+    """Item numbers of the exudyn system, filled while the model is built.
 
-    half_throw_nodes: list = field(default_factory=list)
-    half_throw_bodies: list = field(default_factory=list)
+    Per half-throw h (h = 2k: journal-1 side of throw k, 2k + 1: journal-2 side): journal_markers
+    (rigid, main-journal centre, frame = crank frame at the reference), web_markers (rigid, CW
+    interface, frame = CW frame). pin_markers: (marker, throw, share of the gas force).
+    """
+
+    spin_node: int | None = None
+    rigid_bodies: list = field(default_factory=list)
+    flexible_bodies: list = field(default_factory=list)
+    journal_markers: list = field(default_factory=list)
+    web_markers: list = field(default_factory=list)
     pin_markers: list = field(default_factory=list)
+    pin_force_body_fixed: bool = True
     springs: list = field(default_factory=list)
     cw_rigid_nodes: list = field(default_factory=list)
     cw_modal_nodes: list = field(default_factory=list)
     cw_joints: list = field(default_factory=list)
 
 
+def _throw_center(params: ModelParams, k: int) -> float:
+    return k * params.throw.throw_pitch
+
+
 def _add_half_throws(mbs, params: ModelParams, speed: float, items: _Items) -> None:
+    """Rigid half-throws; the two of one throw are joined at the crank pin by the pin spring."""
     throw = params.throw
-    for side in (-1.0, 1.0):
-        created = mbs.CreateRigidBody(
-            inertia=_half_throw_inertia(throw, side),
-            referencePosition=[0.0, 0.0, side * throw.web_center_z],
-            initialAngularVelocity=[0.0, 0.0, speed],
-            nodeType=exu.NodeType.RotationRxyz,
-            returnDict=True,
-            show=False,
-        )
-        items.half_throw_nodes.append(created["nodeNumber"])
-        items.half_throw_bodies.append(created["bodyNumber"])
+    damped = params.solver.damping
+    axial_offset = throw.bearing_z - throw.web_center_z
+    last = params.throws - 1
+    for k, angle in enumerate(params.throw_angles):
+        rotation = _rotation_z(angle)
+        bodies = []
+        for side in (-1.0, 1.0):
+            shared = (side < 0 and k > 0) or (side > 0 and k < last)
+            created = mbs.CreateRigidBody(
+                inertia=_half_throw_inertia(throw, side, 0.5 if shared else 1.0),
+                referencePosition=[0.0, 0.0, _throw_center(params, k) + side * throw.web_center_z],
+                referenceRotationMatrix=rotation,
+                initialAngularVelocity=[0.0, 0.0, speed],
+                nodeType=exu.NodeType.RotationRxyz,
+                returnDict=True,
+                show=False,
+            )
+            body = created["bodyNumber"]
+            bodies.append(body)
+            items.rigid_bodies.append(body)
+            if items.spin_node is None:
+                items.spin_node = created["nodeNumber"]
+            items.journal_markers.append(mbs.AddMarker(eu.MarkerBodyRigid(
+                bodyNumber=body, localHT=exu.HT(rotation=rotation.T, translation=[0.0, 0.0, side * axial_offset]))))
+            items.web_markers.append(mbs.AddMarker(eu.MarkerBodyRigid(bodyNumber=body, localHT=exu.HT(
+                rotation=COUNTERWEIGHT_ROTATION, translation=[-throw.counterweight_radius, 0.0, 0.0]))))
+        pin_markers = [
+            mbs.AddMarker(eu.MarkerBodyRigid(bodyNumber=body, localPosition=[throw.crank_radius, 0.0, -side * throw.web_center_z]))
+            for body, side in zip(bodies, (-1.0, 1.0))
+        ]
+        items.springs.append(mbs.AddObject(eu.RigidBodySpringDamper(
+            markerNumbers=pin_markers,
+            stiffness=np.diag(throw.pin_stiffness),
+            damping=np.diag(throw.pin_damping) if damped else np.zeros((6, 6)),
+        )))
+        items.pin_markers += [(marker, k, 0.5) for marker in pin_markers]
 
 
-def _add_bearings_and_pin(mbs, params: ModelParams, items: _Items) -> None:
+def _add_bearings_and_journals(mbs, params: ModelParams, items: _Items) -> None:
+    """Main bearing per journal (ground springs; thrust on journal 1) and, between neighbouring
+    throws, the journal spring-damper that joins them."""
     throw = params.throw
     damped = params.solver.damping
     ground = mbs.AddObject(eu.ObjectGround())
-    axial_offset = throw.bearing_z - throw.web_center_z
-    for index, side in enumerate((-1.0, 1.0)):
-        body = items.half_throw_bodies[index]
-        on_ground = mbs.AddMarker(eu.MarkerBodyPosition(bodyNumber=ground, localPosition=[0.0, 0.0, side * throw.bearing_z]))
-        on_journal = mbs.AddMarker(eu.MarkerBodyPosition(bodyNumber=body, localPosition=[0.0, 0.0, side * axial_offset]))
-        axial = throw.axial_stiffness if index == 0 else 0.0
-        damping = throw.bearing_damping if damped else 0.0
+    damping = throw.bearing_damping if damped else 0.0
+    # A shared journal's bearing is split half/half onto the two half-journals that meet there
+    # (one bearing when the journal spring is stiff; each throw keeps its support when it is soft).
+    for h, marker in enumerate(items.journal_markers):
+        j = (h + 1) // 2
+        share = 1.0 if j in (0, params.throws) else 0.5
+        on_ground = mbs.AddMarker(eu.MarkerBodyPosition(
+            bodyNumber=ground, localPosition=[0.0, 0.0, _throw_center(params, j) - throw.bearing_z]))
+        axial = throw.axial_stiffness if j == 0 else 0.0
         items.springs.append(mbs.AddObject(eu.CartesianSpringDamper(
-            markerNumbers=[on_ground, on_journal],
-            stiffness=[throw.bearing_stiffness, throw.bearing_stiffness, axial],
-            damping=[damping, damping, damping if index == 0 else 0.0],
+            markerNumbers=[on_ground, marker],
+            stiffness=[share * throw.bearing_stiffness, share * throw.bearing_stiffness, axial],
+            damping=[share * damping, share * damping, damping if j == 0 else 0.0],
         )))
-    pin_markers = [
-        mbs.AddMarker(eu.MarkerBodyRigid(bodyNumber=body, localPosition=[throw.crank_radius, 0.0, -side * throw.web_center_z]))
-        for body, side in zip(items.half_throw_bodies, (-1.0, 1.0))
-    ]
-    items.springs.append(mbs.AddObject(eu.RigidBodySpringDamper(
-        markerNumbers=pin_markers,
-        stiffness=np.diag(throw.pin_stiffness),
-        damping=np.diag(throw.pin_damping) if damped else np.zeros((6, 6)),
-    )))
-    items.pin_markers = pin_markers
+    for j in range(1, params.throws):
+        items.springs.append(mbs.AddObject(eu.RigidBodySpringDamper(
+            markerNumbers=[items.journal_markers[2 * j - 1], items.journal_markers[2 * j]],
+            stiffness=np.diag(throw.journal_stiffness),
+            damping=np.diag(throw.journal_damping) if damped else np.zeros((6, 6)),
+        )))
 
 
 def _add_drive(mbs, params: ModelParams, speed: float, items: _Items) -> None:
     if params.solver.drive == "free":
         return
-    spin = mbs.AddMarker(eu.MarkerNodeCoordinate(nodeNumber=items.half_throw_nodes[0], coordinate=5))
+    spin = mbs.AddMarker(eu.MarkerNodeCoordinate(nodeNumber=items.spin_node, coordinate=5))
     ground_node = mbs.AddNode(eu.NodePointGround())
     fixed = mbs.AddMarker(eu.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
     if "torsional_vibration" not in params.effects:
@@ -133,22 +181,24 @@ def _add_drive(mbs, params: ModelParams, speed: float, items: _Items) -> None:
 
 
 def _add_counterweights(mbs, params: ModelParams, reduced: ReducedCounterweight, speed: float, items: _Items) -> None:
+    """One reduced CW per half-throw (the same reduced body reused), frame joined to its web marker."""
     throw = params.throw
     interface = ObjectFFRFreducedOrderInterface(reduced.fem_interface())
     modal_damping = np.diag(2.0 * params.modal_damping_ratio * 2.0 * np.pi * reduced.eigenfrequencies)
-    for index, side in enumerate((-1.0, 1.0)):
-        position = np.array([-throw.counterweight_radius, 0.0, side * throw.web_center_z])
+    for h, on_web in enumerate(items.web_markers):
+        k, side = divmod(h, 2)
+        rotation = _rotation_z(params.throw_angles[k])
+        position = rotation @ [-throw.counterweight_radius, 0.0, 0.0] \
+            + [0.0, 0.0, _throw_center(params, k) + (2 * side - 1) * throw.web_center_z]
         created = interface.AddObjectFFRFreducedOrder(
             mbs,
             positionRef=position,
             initialVelocity=np.cross([0.0, 0.0, speed], position),
-            rotationMatrixRef=COUNTERWEIGHT_ROTATION,
+            rotationMatrixRef=rotation @ COUNTERWEIGHT_ROTATION,
             initialAngularVelocity=[0.0, 0.0, speed],
         )
         if params.solver.damping and params.modal_damping_ratio > 0:
             mbs.SetObjectParameter(created["oFFRFreducedOrder"], "dampingMatrixReduced", exu.MatrixContainer(modal_damping))
-        interface_on_web = exu.HT(rotation=COUNTERWEIGHT_ROTATION, translation=[-throw.counterweight_radius, 0.0, 0.0])
-        on_web = mbs.AddMarker(eu.MarkerBodyRigid(bodyNumber=items.half_throw_bodies[index], localHT=interface_on_web))
         on_cw = mbs.AddMarker(eu.MarkerNodeRigid(nodeNumber=created["nRigidBody"]))
         if throw.joint_stiffness is None:
             joint = mbs.AddObject(eu.GenericJoint(markerNumbers=[on_web, on_cw], constrainedAxes=[1] * 6))
@@ -165,7 +215,9 @@ def _add_loads(mbs, params: ModelParams, speed: float, items: _Items) -> None:
     """Loads evaluate scalar math in their user functions: numpy call overhead per step would
     dominate the solver time (measured: 45 us per numpy evaluation against 120 us per step).
     Both loads fade in over SolverParams.ramp_revolutions (half-cosine): switching the full gas
-    torque on at t = 0 is a step of several hundred kN at the pin that rings for revolutions."""
+    torque on at t = 0 is a step of several hundred kN at the pin that rings for revolutions.
+    Cylinder k's gas torque is the order table shifted by its firing angle (order n: phase
+    - n x firing angle)."""
     excitation = params.excitation
     radius = params.throw.crank_radius
     ramp_time = params.solver.ramp_revolutions * 2.0 * math.pi / speed
@@ -174,13 +226,11 @@ def _add_loads(mbs, params: ModelParams, speed: float, items: _Items) -> None:
         return 1.0 if t >= ramp_time else 0.5 * (1.0 - math.cos(math.pi * t / ramp_time))
 
     if "gas_torque" in params.effects:
-        table = [(w, 0.5 * amplitude / radius, phase) for w, amplitude, phase in gas_torque_table(speed, excitation)]
-
-        def tangential_half_force(mbs_, t, load_vector):
-            return [0.0, ramp(t) * sum(a * math.cos(w * t + p) for w, a, p in table), 0.0]
-
-        for marker in items.pin_markers:
-            mbs.AddLoad(eu.LoadForceVector(markerNumber=marker, bodyFixed=True, loadVectorUserFunction=tangential_half_force))
+        base = gas_torque_table(speed, excitation)
+        for marker, k, share in items.pin_markers:
+            firing = params.firing_angles[k]
+            table = [(w, share * amplitude / radius, phase - (w / speed) * firing) for w, amplitude, phase in base]
+            mbs.AddLoad(_gas_load(marker, table, ramp, items.pin_force_body_fixed, speed, params.throw_angles[k]))
     if "gear_mesh" in params.effects:
         mesh_speed = excitation.gear_teeth * speed
         amplitude = excitation.gear_torque_amplitude
@@ -188,8 +238,22 @@ def _add_loads(mbs, params: ModelParams, speed: float, items: _Items) -> None:
         def mesh_torque(mbs_, t, load_vector):
             return [0.0, 0.0, ramp(t) * amplitude * math.sin(mesh_speed * t)]
 
-        journal2 = mbs.AddMarker(eu.MarkerBodyRigid(bodyNumber=items.half_throw_bodies[1]))
-        mbs.AddLoad(eu.LoadTorqueVector(markerNumber=journal2, bodyFixed=True, loadVectorUserFunction=mesh_torque))
+        mbs.AddLoad(eu.LoadTorqueVector(markerNumber=items.journal_markers[-1], bodyFixed=True,
+                                        loadVectorUserFunction=mesh_torque))
+
+
+def _gas_load(marker: int, table: list, ramp, body_fixed: bool, speed: float, throw_angle: float):
+    """Tangential gas force at a pin marker: in the body frame, or (flexible throws, whose pin
+    markers have no body-fixed frame) along the tangent of the ideally spinning pin."""
+    if body_fixed:
+        def tangential_force(mbs_, t, load_vector):
+            return [0.0, ramp(t) * sum(a * math.cos(w * t + p) for w, a, p in table), 0.0]
+    else:
+        def tangential_force(mbs_, t, load_vector):
+            force = ramp(t) * sum(a * math.cos(w * t + p) for w, a, p in table)
+            angle = throw_angle + speed * t
+            return [-force * math.sin(angle), force * math.cos(angle), 0.0]
+    return eu.LoadForceVector(markerNumber=marker, bodyFixed=body_fixed, loadVectorUserFunction=tangential_force)
 
 
 def _sensor(mbs, **kwargs):
@@ -199,8 +263,8 @@ def _sensor(mbs, **kwargs):
 
 def _add_sensors(mbs, items: _Items, energy: bool) -> dict:
     ovt = exu.OutputVariableType
-    sensors = {"spin": _sensor(mbs, nodeNumber=items.half_throw_nodes[0], outputVariableType=ovt.Coordinates_t),
-               "angle": _sensor(mbs, nodeNumber=items.half_throw_nodes[0], outputVariableType=ovt.Coordinates)}
+    sensors = {"spin": _sensor(mbs, nodeNumber=items.spin_node, outputVariableType=ovt.Coordinates_t),
+               "angle": _sensor(mbs, nodeNumber=items.spin_node, outputVariableType=ovt.Coordinates)}
     per_cw = {
         "q": ("node", ovt.Coordinates), "q_t": ("node", ovt.Coordinates_t), "q_tt": ("node", ovt.Coordinates_tt),
         "rotation": ("rigid", ovt.RotationMatrix), "acceleration": ("rigid", ovt.Acceleration),
@@ -209,7 +273,7 @@ def _add_sensors(mbs, items: _Items, energy: bool) -> dict:
         "joint_displacement": ("joint", ovt.DisplacementLocal), "joint_rotation": ("joint", ovt.Rotation),
         "joint_force": ("joint", ovt.ForceLocal), "joint_moment": ("joint", ovt.TorqueLocal),
     }
-    for c in range(2):
+    for c in range(len(items.cw_joints)):
         for key, (kind, variable) in per_cw.items():
             if kind == "node":
                 sensors[(key, c)] = _sensor(mbs, nodeNumber=items.cw_modal_nodes[c], outputVariableType=variable)
@@ -219,7 +283,7 @@ def _add_sensors(mbs, items: _Items, energy: bool) -> dict:
                 sensors[(key, c)] = _sensor(mbs, objectNumber=items.cw_joints[c], outputVariableType=variable)
     if energy:
         sensors["kinetic"] = [mbs.AddSensor(eu.SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=ovt.KineticEnergy))
-                              for b in items.half_throw_bodies]
+                              for b in items.rigid_bodies]
         sensors["potential"] = [mbs.AddSensor(eu.SensorObject(objectNumber=o, storeInternal=True, outputVariableType=ovt.PotentialEnergy))
                                 for o in items.springs]
     return sensors
@@ -232,7 +296,7 @@ def _build(params: ModelParams, reduced: ReducedCounterweight, *, loads: bool,
     mbs = system.AddSystem()
     items = _Items()
     _add_half_throws(mbs, params, speed, items)
-    _add_bearings_and_pin(mbs, params, items)
+    _add_bearings_and_journals(mbs, params, items)
     _add_drive(mbs, params, speed, items)
     _add_counterweights(mbs, params, reduced, speed, items)
     if initial_modal_coordinates is not None:

@@ -18,7 +18,7 @@ from mbs.counterweight import CounterweightGeometry
 from reduction.errors import InputError
 
 #: The effects a scene can switch on; code for an effect that is off is not run.
-KNOWN_EFFECTS = frozenset({"gas_torque", "gear_mesh", "torsional_vibration"})
+KNOWN_EFFECTS = frozenset({"gas_torque", "gear_mesh", "torsional_vibration", "flexible_crankshaft"})
 
 
 @dataclass(frozen=True)
@@ -38,6 +38,16 @@ class CrankThrowParams:
     joint_stiffness: None (default) joins each CW interface rigidly to its web; or 6 values
     (3 N/mm, 3 N mm/rad, CW frame) of a stiff spring standing for the bolted joint, so that the
     interface motion relative to the web is the spring's deflection.
+    journal_stiffness: 6 values (3 N/mm, 3 N mm/rad, crank frame) of the spring-damper that joins
+    neighbouring throws of a multi-throw crankshaft at their shared main journal. Defaults are the
+    closed forms of one main journal (length L = journal_length, radius r = journal_radius,
+    E = 210 GPa, G = 80.8 GPa): shear 0.9 G pi r^2 / L = 2.9e7 N/mm (x, y), axial
+    E pi r^2 / L = 8.2e7 N/mm (z), bending E I / L = 4.6e11 N mm/rad (x, y),
+    torsion G J / L = 3.6e11 N mm/rad (z) with I = pi r^4 / 4, J = 2 I. journal_damping: same
+    layout, N s/mm and N mm s/rad.
+    youngs_modulus (MPa), poisson_ratio: material of the Craig-Bampton throw bodies of the
+    "flexible_crankshaft" effect; flexible_modes: fixed-interface normal modes per throw body
+    (besides the 18 constraint modes of its three non-frame interfaces).
     Damping is light structural damping (about 1 % at the 400 Hz coupled torsion mode) so that
     resonances stand out; hydrodynamic oil-film damping of the bearings is not modelled.
     """
@@ -57,6 +67,11 @@ class CrankThrowParams:
     pin_stiffness: tuple[float, ...] = (5.0e6, 5.0e6, 5.0e6, 5.0e11, 5.0e11, 5.0e11)
     pin_damping: tuple[float, ...] = (20.0, 20.0, 20.0, 2.0e6, 2.0e6, 2.0e6)
     joint_stiffness: tuple[float, ...] | None = None
+    journal_stiffness: tuple[float, ...] = (2.9e7, 2.9e7, 8.2e7, 4.6e11, 4.6e11, 3.6e11)
+    journal_damping: tuple[float, ...] = (20.0, 20.0, 20.0, 2.0e6, 2.0e6, 2.0e6)
+    youngs_modulus: float = 210000.0
+    poisson_ratio: float = 0.3
+    flexible_modes: int = 8
 
     @property
     def web_center_z(self) -> float:
@@ -67,6 +82,11 @@ class CrankThrowParams:
     def bearing_z(self) -> float:
         """Axial position of the main-bearing centres (+/-), mm."""
         return self.web_center_z + 0.5 * (self.web_thickness + self.journal_length)
+
+    @property
+    def throw_pitch(self) -> float:
+        """Axial distance of neighbouring throws (main-journal centre to main-journal centre), mm."""
+        return 2.0 * self.bearing_z
 
 
 @dataclass(frozen=True)
@@ -147,6 +167,13 @@ class ModelParams:
 
     speed_rpm: engine speed. n_modes: Craig-Bampton (fixed-interface) modes per CW.
     modal_damping_ratio: damping ratio of every CW mode (-). effects: subset of KNOWN_EFFECTS.
+    throws: number of crank throws chained along the crank axis (1 = the single-throw model);
+    throw k sits at z = k x throw_pitch (journal centre to journal centre), throws share main
+    journals and carry two CWs each (cw1, cw2 on throw 1, cw3, cw4 on throw 2, ...).
+    crank_angles_deg: angle of each throw's pin about the crank axis (deg, direction of rotation);
+    default evenly spaced, 360 k / throws. firing_angles_deg: crank angle at which each cylinder
+    fires within the 720 deg four-stroke cycle (its gas-torque phase table: order n of cylinder k
+    is shifted by -n x firing angle); default: the crank angles.
     """
 
     speed_rpm: float = 750.0
@@ -157,8 +184,35 @@ class ModelParams:
     excitation: ExcitationParams = field(default_factory=ExcitationParams)
     solver: SolverParams = field(default_factory=SolverParams)
     effects: frozenset = frozenset({"gas_torque", "gear_mesh"})
+    throws: int = 1
+    crank_angles_deg: tuple[float, ...] | None = None
+    firing_angles_deg: tuple[float, ...] | None = None
+
+    @property
+    def throw_angles(self) -> tuple[float, ...]:
+        """Crank angle of each throw's pin, rad."""
+        angles = self.crank_angles_deg if self.crank_angles_deg is not None \
+            else tuple(360.0 * k / self.throws for k in range(self.throws))
+        return tuple(math.radians(a) for a in angles)
+
+    @property
+    def firing_angles(self) -> tuple[float, ...]:
+        """Firing angle of each cylinder in the 720 deg cycle, rad."""
+        if self.firing_angles_deg is None:
+            return self.throw_angles
+        return tuple(math.radians(a) for a in self.firing_angles_deg)
+
+    @property
+    def n_counterweights(self) -> int:
+        return 2 * self.throws
 
     def validate(self) -> None:
+        if not isinstance(self.throws, int) or self.throws < 1:
+            raise InputError(f"throws must be a whole number of at least 1, got {self.throws!r}")
+        for name in ("crank_angles_deg", "firing_angles_deg"):
+            table = getattr(self, name)
+            if table is not None and len(table) != self.throws:
+                raise InputError(f"{name} must give one angle per throw ({self.throws}), got {len(table)}")
         if self.speed_rpm <= 0:
             raise InputError(f"engine speed_rpm must be positive, got {self.speed_rpm}")
         unknown = set(self.effects) - KNOWN_EFFECTS

@@ -2,7 +2,8 @@
 
 Layout (see the team contract): root attrs fretwork_format="fretwork-results", format_version=1;
 ``/histories/time`` and one dataset per signal with attrs units, description and, for (n, k)
-signals, components. Counterweights are cw1 (journal-1 side) and cw2 (journal-2 side); vectors
+signals, components. Counterweights are cw1 (journal-1 side) and cw2 (journal-2 side) of throw 1, cw3 and cw4 of
+throw 2, and so on; vectors
 are in the CW frame (x tangential, y radial outward, z along the crank axis).
 ``/model`` holds what is needed to rebuild acceleration fields on the CW mesh (node coordinates,
 mode shapes, interface and wing-tip nodes); ``/spectra`` and ``/campbell`` hold the analyses.
@@ -59,7 +60,7 @@ def _signal(group, name, data, units, description, components=None):
 
 def _history_signals(histories: RunHistories, reduced: ReducedCounterweight):
     modes = [f"mode {k + 1} ({f:.1f} Hz)" for k, f in enumerate(reduced.eigenfrequencies)]
-    for c in range(2):
+    for c in range(histories.cw_modal_coordinates.shape[0]):
         tag = f"cw{c + 1}"
         com = reduced.center_of_mass
         omega = histories.cw_angular_velocity[c]

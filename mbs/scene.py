@@ -1,7 +1,9 @@
 """Read the multibody part of a scene (TOML) into ModelParams.
 
 The scene's ``[mbs]`` table holds the top-level ModelParams fields (speed_rpm, n_modes,
-modal_damping_ratio, effects = ["gas_torque", "gear_mesh", "torsional_vibration"]) and the
+modal_damping_ratio, effects = ["gas_torque", "gear_mesh", "torsional_vibration",
+"flexible_crankshaft"], throws = 3, crank_angles_deg = [0, 120, 240], firing_angles_deg = [0,
+480, 240]) and the
 sub-tables ``[mbs.counterweight]``, ``[mbs.throw]``, ``[mbs.excitation]``, ``[mbs.solver]`` with
 the fields of the dataclasses of the same meaning (units as documented there). Anything not
 given keeps its default; an unknown key is an error that names it.
@@ -83,7 +85,7 @@ def model_params_from_mapping(table: dict, where: str = "[mbs]", folder: Path = 
         elif name == "effects":
             values[name] = frozenset(value)
         else:
-            values[name] = value
+            values[name] = _as_field_value(value)
     params = replace(ModelParams(), **values)
     if pressure is not None:
         params = _with_pressure_curve(params, pressure, folder, f"{where}.gas_pressure")
