@@ -385,8 +385,16 @@ def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: di
     return Study(scene.name, str(scene_path), base, knobs, not_applicable, reference, records, recommendation)
 
 
-def plot_pareto(study: Study, path: str | Path) -> Path:
-    """Worst decision-quantity error (%) versus cost (CPU time, s), one labelled point per run (PNG)."""
+SHORT_NAMES = {"max_wear_depth_mm": "wear", "cof_map": "COF map", "slip_area_fraction": "slip area",
+               "clamp_force_loss_fraction": "clamp loss"}
+
+
+def plot_pareto(study: dict, path: str | Path) -> Path:
+    """Worst decision-quantity error (%) versus cost (CPU time, s), one labelled point per run (PNG).
+
+    ``study`` is :meth:`Study.to_dict` (or its JSON file read back); each label names the run's
+    settings that differ from the reference and, in brackets, its worst quantity.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -394,8 +402,8 @@ def plot_pareto(study: Study, path: str | Path) -> Path:
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig, ax = plt.subplots(figsize=(9, 6))
-    finished = [r for r in study.records if r["failure"] is None]
+    fig, ax = plt.subplots(figsize=(10, 6.5))
+    finished = [r for r in study["records"] if r["failure"] is None]
     front = {id(r) for r in pareto_front(finished)}
     for record in finished:
         error = 100 * record["worst_error"]
@@ -403,26 +411,31 @@ def plot_pareto(study: Study, path: str | Path) -> Path:
         colour = "tab:green" if record["within_tolerance"] else "tab:red"
         ax.scatter(record[COST], error, marker=marker, color=colour, s=40 if id(record) in front else 20,
                    zorder=3)
-        ax.annotate(record["label"], (record[COST], error), fontsize=7, xytext=(4, 3),
-                    textcoords="offset points")
+        worst = max(record["errors"], key=record["errors"].get, default=None)
+        label = record["label"] + (f" [{SHORT_NAMES[worst]}]" if worst and record["worst_error"] > 0 else "")
+        ax.annotate(label, (record[COST], error), fontsize=7, xytext=(4, 3), textcoords="offset points")
     line = sorted((r[COST], 100 * r["worst_error"]) for r in finished if id(r) in front)
     if line:
         ax.plot(*zip(*line), color="0.6", lw=1, zorder=2, label="Pareto front")
-    if study.recommendation:
-        rec = study.recommendation
+    rec = study["recommendation"]
+    if rec:
         ax.scatter(rec[COST], 100 * rec["worst_error"], s=180, facecolors="none", edgecolors="k",
                    zorder=4, label=f"recommended: {rec['label']}")
     ax.axhline(100 * TOLERANCE, color="k", ls="--", lw=0.8, label=f"{100 * TOLERANCE:g} % tolerance")
     ax.set_xscale("log")
     ax.set_yscale("symlog", linthresh=0.1)
     ax.set_ylim(bottom=0.0, top=3 * max([100 * r["worst_error"] for r in finished] + [100 * TOLERANCE]))
-    ax.set_xlabel("CPU time of the run (build + procedure) [s]")
+    ax.set_xlabel("CPU time of the run (build + procedure, one BLAS thread) [s]")
     ax.set_ylabel("worst decision-quantity error [%]  (x: verdict differs)")
-    failed = [r["label"] for r in study.records if r["failure"]]
-    title = f"accuracy vs time: {study.scene}"
+    reference = study["reference"]["settings"]
+    title = (f"accuracy vs time: {study['scene']}\nreference: "
+             + ", ".join(f"{k}={v:g}" for k, v in reference.items()))
+    if study["base_overrides"]:
+        title += "\nall runs: " + ", ".join(f"{k}={v}" for k, v in study["base_overrides"].items())
+    failed = [r["label"] for r in study["records"] if r["failure"]]
     if failed:
         title += f"\nnot converged: {'; '.join(failed)}"
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8, loc="lower left")
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
@@ -499,7 +512,7 @@ def cmd_accuracy(args) -> int:
 
     study = accuracy_study(args.scene, quick=args.quick, overrides=overrides, sweeps=sweeps, on_run=progress)
     out = Path(args.out)
-    study.plot = str(plot_pareto(study, out / f"accuracy_{study.scene}.png"))
+    study.plot = str(plot_pareto(study.to_dict(), out / f"accuracy_{study.scene}.png"))
     text = json.dumps(study.to_dict(), indent=2, default=float)
     (out / f"accuracy_{study.scene}.json").write_text(text)
     print(text if args.json else "\n".join(table_lines(study)))
