@@ -108,6 +108,7 @@ class ContactSolver:
         self.stiffness_scale = float(np.abs(np.diag(structure.stiffness)).max())  # N/mm
         self.rigid_modes = _rigid_modes(space, self.stiffness_scale)
         self._last_failure = None  # (response, r_ctl, force scale, loaded) of the last failed attempt
+        self._last_compliance = None  # (λ, W·λ) of the last residual
         # S_q without the round-off stiffness (~1e-8 N/mm) of the rigid modes: left in, it
         # would let a body loaded beyond the friction limit find a spurious equilibrium
         # kilometres away instead of reporting the loss of tangential equilibrium.
@@ -118,6 +119,7 @@ class ContactSolver:
         """Drop the factorisations the linear solver keeps across increments (a checkpoint
         boundary: a resumed run then starts from the same solver state as an uninterrupted one)."""
         linear._solvers.pop(self.space, None)
+        self._last_compliance = None
 
     def initial_equilibrium(self) -> Equilibrium:
         n_patterns = len(self.space.structure.patterns)
@@ -134,10 +136,28 @@ class ContactSolver:
         traction = np.concatenate([response.pressure[:, None], response.shear], axis=1)
         return (self.area[:, None] * traction).ravel()
 
+    def _compliance_times(self, forces: np.ndarray) -> np.ndarray:
+        """W·λ (mm), updated from the last product where only a few forces changed.
+
+        The first residual of an increment (the stay-put predictor) differs from the last
+        converged forces only where the history advanced, so one pass over W is saved per
+        increment. W is symmetric: rows are read instead of strided columns.
+        """
+        last = self._last_compliance
+        if last is not None:
+            changed = np.flatnonzero(forces != last[0])
+            if changed.size < 0.2 * forces.size:
+                product = last[1] + self.space.W[changed].T @ (forces[changed] - last[0][changed])
+                self._last_compliance = (forces, product)
+                return product
+        product = self.space.W @ forces
+        self._last_compliance = (forces, product)
+        return product
+
     def _residual(self, g, q, state, reference, g_f, f_q):
         response = evaluate(*self._split(g, reference), state, self.law)
         forces = self._forces(response)
-        r_kin = g - g_f + self.space.E @ q + self.space.W @ forces
+        r_kin = g - g_f + self.space.E @ q + self._compliance_times(forces)
         r_ctl = self.control_stiffness @ q - self.space.E.T @ forces - f_q
         return r_kin, r_ctl, response, forces
 
@@ -202,7 +222,7 @@ class ContactSolver:
         # stick, small γ_crit, following the drive makes every point slide at first and
         # Newton then crawls back to stick a few points per iteration). Start from the better.
         best = None
-        for g in (start.kinematics + (g_f - self.space.driving(start.amplitudes)[0]), start.kinematics):
+        for g in (start.kinematics, start.kinematics + (g_f - self.space.driving(start.amplitudes)[0])):
             candidate = self._residual(g, q, state, reference, g_f, f_q)
             candidate_merit = self._merit(candidate[0], candidate[1], force_scale)
             if best is None or candidate_merit < best[0]:
