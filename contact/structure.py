@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 
 from reduction.errors import InputError
 
@@ -68,16 +67,35 @@ class Structure:
         return tuple(self.loads) + tuple(self.motions)
 
 
-class _BlockFactor:
-    """LU factors of a block-diagonal dense matrix, one per connected block (one per body)."""
+def _diagonal_blocks(matrix: np.ndarray, index: np.ndarray) -> list[np.ndarray]:
+    """Split ``index`` into runs whose rows and columns of ``matrix`` couple only within the run.
 
-    def __init__(self, matrix: np.ndarray):
-        n_blocks, labels = connected_components(sp.csr_matrix(np.abs(matrix) > 0), directed=False)
-        self.blocks = [np.flatnonzero(labels == b) for b in range(n_blocks)]
+    Bodies are numbered one after the other, so their blocks are contiguous runs; a run ends
+    where no row so far reaches past it (found from each row's last coupled column, without
+    forming a sparse copy of the dense matrix)."""
+    last = np.empty(index.size, dtype=int)
+    for start in range(0, index.size, 2048):  # row chunks keep the boolean temporary small
+        rows = matrix[np.ix_(index[start:start + 2048], index)] != 0.0
+        reach = index.size - 1 - np.argmax(rows[:, ::-1], axis=1)
+        last[start:start + 2048] = np.where(rows.any(axis=1), reach, np.arange(start, start + len(rows)))
+    ends = np.flatnonzero(np.maximum.accumulate(last) == np.arange(index.size))
+    starts = np.concatenate([[0], ends[:-1] + 1])
+    return [index[a:b + 1] for a, b in zip(starts, ends)]
+
+
+class _BlockFactor:
+    """LU factors of the block-diagonal contact-DOF stiffness, one per body block."""
+
+    def __init__(self, stiffness: np.ndarray, index: np.ndarray):
+        self.index = index
+        position = np.empty(stiffness.shape[0], dtype=int)
+        position[index] = np.arange(index.size)
+        self.blocks = [position[block] for block in _diagonal_blocks(stiffness, index)]
         self.factors = []
-        for index in self.blocks:
-            block = matrix[np.ix_(index, index)]
-            factor = la.lu_factor(block, check_finite=False)
+        for block in self.blocks:
+            global_block = index[block]
+            factor = la.lu_factor(stiffness[np.ix_(global_block, global_block)], check_finite=False,
+                                  overwrite_a=True)
             pivots = np.abs(np.diag(factor[0]))
             if pivots.min() <= 1e-12 * pivots.max():
                 raise InputError("a body is not supported: its stiffness is singular with the "
@@ -87,9 +105,22 @@ class _BlockFactor:
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         out = np.empty_like(rhs, dtype=float)
-        for index, factor in zip(self.blocks, self.factors):
-            out[index] = la.lu_solve(factor, rhs[index], check_finite=False)
+        for block, factor in zip(self.blocks, self.factors):
+            out[block] = la.lu_solve(factor, rhs[block], check_finite=False)
         return out
+
+    def congruence(self, operator: sp.csr_matrix) -> np.ndarray:
+        """operator·K⁻¹·operatorᵀ, one body block at a time (no dense global operator)."""
+        result = np.zeros((operator.shape[0], operator.shape[0]))
+        columns = operator.tocsc()
+        for block, factor in zip(self.blocks, self.factors):
+            part = columns[:, block]
+            touched = np.unique(part.tocoo().row)
+            if touched.size == 0:
+                continue
+            local = part[touched].toarray().T  # (block, touched rows)
+            result[np.ix_(touched, touched)] += part[touched] @ la.lu_solve(factor, local, check_finite=False)
+        return result
 
 
 class ContactSpace:
@@ -108,13 +139,12 @@ class ContactSpace:
         self.prescribed = prescribed
         K = structure.stiffness
         c, q, p = self.contact_dofs, self.control_dofs, prescribed
-        self._Kcc = _BlockFactor(K[np.ix_(c, c)])
+        self._Kcc = _BlockFactor(K, c)
         self._Kcq, self._Kcp = K[np.ix_(c, q)], K[np.ix_(c, p)]
         Gc = G[:, c]
         self.Gc = Gc.tocsr()
-        compliance_Gt = self._Kcc.solve(Gc.T.toarray())
-        self.W = np.ascontiguousarray(Gc @ compliance_Gt)
-        self.W = 0.5 * (self.W + self.W.T)
+        self.W = self._Kcc.congruence(self.Gc)
+        self.W = np.ascontiguousarray(0.5 * (self.W + self.W.T))
         compliance_Kcq = self._Kcc.solve(self._Kcq)
         self.E = Gc @ compliance_Kcq
         self.Sq = K[np.ix_(q, q)] - self._Kcq.T @ compliance_Kcq
