@@ -11,6 +11,7 @@ from pathlib import Path
 
 import h5py
 import matplotlib
+import matplotlib.tri
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -97,10 +98,15 @@ def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
         else:
             a, b = _plane_axes(coordinates)
             written.append(_path_plot(coordinates, final, names, a, b, title, out_dir))
+            facets = file["points/facets"][()] if "points/facets" in file else None
+            # Triangles of the interface's own facets: holes (a bolt hole) stay holes.
+            triangles = None if facets is None else (
+                facets if facets.shape[1] == 3 else np.concatenate([facets[:, [0, 1, 2]], facets[:, [0, 2, 3]]]))
+            mesh = matplotlib.tri.Triangulation(coordinates[:, a], coordinates[:, b], triangles)
             for name in names:
                 fig, ax = plt.subplots(figsize=(6, 4.5))
                 value = _field(final, name)
-                mappable = ax.tricontourf(coordinates[:, a], coordinates[:, b], value, levels=24, cmap="viridis")
+                mappable = ax.tricontourf(mesh, value, levels=24, cmap="viridis")
                 fig.colorbar(mappable, ax=ax, label=FIELD_LABELS[name])
                 ax.set_aspect("equal")
                 ax.set_xlabel(f"{'xyz'[a]} [mm]")
