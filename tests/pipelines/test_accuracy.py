@@ -104,3 +104,17 @@ def test_a_contact_size_the_mesh_generator_rejects_stops_before_any_run(tmp_path
     error = capsys.readouterr().err
     assert "contact_size 4 mm" in error and "multiples" in error
     assert not list(tmp_path.iterdir())
+
+
+def test_a_failing_combination_steps_back_the_knob_that_erred_most_alone():
+    from pipelines.accuracy import Knob, _step_back
+    knobs = [Knob("contact_size", "h", (0.05, 0.1, 0.2), False), Knob("cycle_jump", "J", (1000.0, 2000.0), False)]
+    records = [{"varied": ["contact_size"], "settings": {"contact_size": 0.2, "cycle_jump": 1000.0},
+                "worst_error": 0.015},
+               {"varied": ["contact_size"], "settings": {"contact_size": 0.1, "cycle_jump": 1000.0},
+                "worst_error": 0.004},
+               {"varied": ["cycle_jump"], "settings": {"contact_size": 0.05, "cycle_jump": 2000.0},
+                "worst_error": 0.010}]
+    combined = {"contact_size": 0.2, "cycle_jump": 2000.0}
+    assert _step_back(knobs, records, combined, ("contact_size", "cycle_jump")) == {
+        "contact_size": 0.1, "cycle_jump": 2000.0}
