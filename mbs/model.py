@@ -32,8 +32,10 @@ from exudyn.FEM import ObjectFFRFreducedOrderInterface
 
 from mbs.counterweight import ReducedCounterweight, reduce_counterweight
 from mbs.excitation import gas_torque_table
+from mbs.flexible_throw import ReducedThrow, reduce_throw
 from mbs.histories import RunHistories, collect_histories
 from mbs.parameters import CrankThrowParams, ModelParams
+from reduction.errors import InputError
 
 class SimulationError(RuntimeError):
     """The time integration of a run failed (Newton did not converge)."""
@@ -129,6 +131,51 @@ def _add_half_throws(mbs, params: ModelParams, speed: float, items: _Items) -> N
             damping=np.diag(throw.pin_damping) if damped else np.zeros((6, 6)),
         )))
         items.pin_markers += [(marker, k, 0.5) for marker in pin_markers]
+
+
+#: Stiffness-proportional damping of the flexible throws, s: 1 % of critical at 400 Hz (the coupled
+#: CW torsion mode), beta = 2 zeta / omega.
+FLEXIBLE_THROW_DAMPING = 2.0 * 0.01 / (2.0 * math.pi * 400.0)
+
+
+def _add_flexible_throws(mbs, params: ModelParams, speed: float, items: _Items, reduced_throw: ReducedThrow) -> None:
+    """One Craig-Bampton throw body per throw (mbs.flexible_throw); its markers take the places
+    of the rigid half-throws' markers. Its frame is journal 1's cut face, which is not a rigid
+    body with a spin coordinate: a small drive flange (Rxyz rigid body, the journal's section,
+    10 mm long) is joined rigidly to journal 1 of throw 1 and carries the drive and the spin
+    sensors. The gas force acts on the pin mid-section (MarkerSuperElementPosition)."""
+    throw = params.throw
+    interface = ObjectFFRFreducedOrderInterface(reduced_throw.fem_interface())
+    journal_nodes, cw_nodes = reduced_throw.interface_nodes[:2], reduced_throw.interface_nodes[2:]
+    for k, angle in enumerate(params.throw_angles):
+        rotation = _rotation_z(angle)
+        created = interface.AddObjectFFRFreducedOrder(
+            mbs, positionRef=[0.0, 0.0, _throw_center(params, k)], rotationMatrixRef=rotation,
+            initialAngularVelocity=[0.0, 0.0, speed],
+            stiffnessProportionalDamping=FLEXIBLE_THROW_DAMPING if params.solver.damping else 0.0)
+        body = created["oFFRFreducedOrder"]
+        items.flexible_bodies.append((body, created["nRigidBody"], created["nGenericODE2"]))
+
+        def rigid_marker(nodes, local_rotation):
+            return mbs.AddMarker(eu.MarkerSuperElementRigid(
+                bodyNumber=body, meshNodeNumbers=nodes, weightingFactors=np.full(len(nodes), 1.0 / len(nodes)),
+                localHT=exu.HT(rotation=local_rotation, translation=[0.0, 0.0, 0.0])))
+
+        for nodes_j, nodes_cw in zip(journal_nodes, cw_nodes):
+            items.journal_markers.append(rigid_marker(nodes_j, rotation.T))
+            items.web_markers.append(rigid_marker(nodes_cw, COUNTERWEIGHT_ROTATION))
+        pin = reduced_throw.pin_nodes
+        items.pin_markers.append((mbs.AddMarker(eu.MarkerSuperElementPosition(
+            bodyNumber=body, meshNodeNumbers=pin, weightingFactors=np.full(len(pin), 1.0 / len(pin)))), k, 1.0))
+    items.pin_force_body_fixed = False
+    flange = mbs.CreateRigidBody(
+        inertia=eu.InertiaCylinder(throw.density, 10.0, throw.journal_radius, axis=2),
+        referencePosition=[0.0, 0.0, -throw.bearing_z], initialAngularVelocity=[0.0, 0.0, speed],
+        nodeType=exu.NodeType.RotationRxyz, returnDict=True, show=False)
+    items.rigid_bodies.append(flange["bodyNumber"])
+    items.spin_node = flange["nodeNumber"]
+    on_flange = mbs.AddMarker(eu.MarkerBodyRigid(bodyNumber=flange["bodyNumber"]))
+    mbs.AddObject(eu.GenericJoint(markerNumbers=[on_flange, items.journal_markers[0]], constrainedAxes=[1] * 6))
 
 
 def _add_bearings_and_journals(mbs, params: ModelParams, items: _Items) -> None:
@@ -290,12 +337,15 @@ def _add_sensors(mbs, items: _Items, energy: bool) -> dict:
 
 
 def _build(params: ModelParams, reduced: ReducedCounterweight, *, loads: bool,
-           initial_modal_coordinates: np.ndarray | None = None):
+           initial_modal_coordinates: np.ndarray | None = None, reduced_throw: ReducedThrow | None = None):
     speed = params.shaft_speed
     system = exu.SystemContainer()
     mbs = system.AddSystem()
     items = _Items()
-    _add_half_throws(mbs, params, speed, items)
+    if "flexible_crankshaft" in params.effects:
+        _add_flexible_throws(mbs, params, speed, items, reduced_throw or reduce_throw(params.throw))
+    else:
+        _add_half_throws(mbs, params, speed, items)
     _add_bearings_and_journals(mbs, params, items)
     _add_drive(mbs, params, speed, items)
     _add_counterweights(mbs, params, reduced, speed, items)
@@ -308,7 +358,7 @@ def _build(params: ModelParams, reduced: ReducedCounterweight, *, loads: bool,
 
 
 def system_eigenfrequencies(params: ModelParams, reduced: ReducedCounterweight | None = None,
-                            max_frequency: float = 2000.0) -> np.ndarray:
+                            max_frequency: float = 2000.0, *, reduced_throw: ReducedThrow | None = None) -> np.ndarray:
     """Eigenfrequencies (Hz, ascending, up to max_frequency) of the assembled multibody model.
 
     Undamped, constraints projected out (exudyn ComputeODE2Eigenvalues), linearised at the
@@ -317,7 +367,7 @@ def system_eigenfrequencies(params: ModelParams, reduced: ReducedCounterweight |
     """
     params.validate()
     reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
-    system, mbs, _ = _build(params, reduced, loads=False)
+    system, mbs, _ = _build(params, reduced, loads=False, reduced_throw=reduced_throw)
     mbs.Assemble()
     frequencies, _ = mbs.ComputeODE2Eigenvalues(convert2Frequencies=True, ignoreAlgebraicEquations=False)
     frequencies = np.sort(np.asarray(frequencies))
@@ -325,17 +375,23 @@ def system_eigenfrequencies(params: ModelParams, reduced: ReducedCounterweight |
 
 
 def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None,
-             initial_modal_coordinates: np.ndarray | None = None, energy: bool = False) -> RunHistories:
+             initial_modal_coordinates: np.ndarray | None = None, energy: bool = False,
+             reduced_throw: ReducedThrow | None = None) -> RunHistories:
     """Run the model at params.speed_rpm for params.solver.revolutions, fixed time step.
 
     reduced: a precomputed reduced CW (reuse it across a sweep); built from params if None.
     initial_modal_coordinates: (n_modes,) initial CW modal coordinates (both CWs), e.g. to
     release the torsion mode for a free-decay frequency check. energy: also record the total
-    mechanical energy (meaningful with drive="free", damping off and no excitation).
+    mechanical energy (meaningful with drive="free", damping off and no excitation; rigid throws).
+    reduced_throw: a precomputed Craig-Bampton throw for the "flexible_crankshaft" effect
+    (mbs.flexible_throw.reduce_throw); built from params.throw if None.
     """
     params.validate()
     reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
-    system, mbs, items = _build(params, reduced, loads=True, initial_modal_coordinates=initial_modal_coordinates)
+    if energy and "flexible_crankshaft" in params.effects:
+        raise InputError("energy bookkeeping covers rigid throws only; switch the flexible_crankshaft effect off")
+    system, mbs, items = _build(params, reduced, loads=True, initial_modal_coordinates=initial_modal_coordinates,
+                                reduced_throw=reduced_throw)
     sensors = _add_sensors(mbs, items, energy)
     mbs.Assemble()
 
@@ -365,3 +421,30 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None
         raise SimulationError(f"time integration did not converge at {params.speed_rpm} rpm (time step "
                               f"{solver.time_step} s); exudyn: {' '.join(solver_log.getvalue().split())[:400]}")
     return collect_histories(mbs, sensors, reduced, energy, wall_time)
+
+
+def torsion_decay_mode(params: ModelParams, reduced: ReducedCounterweight | None = None, *,
+                       reduced_throw: ReducedThrow | None = None) -> tuple[float, float]:
+    """Frequency (Hz) and amplitude of the coupled mode that dominates CW 1's torsion coordinate
+    when the torsion mode of every CW is released by 0.1 (the free-decay test), from the
+    eigen-analysis of the assembled model.
+
+    The released state x0 is expanded in the undamped eigenvectors (x0 = V c, least squares,
+    exact: x0 touches only unconstrained CW modal coordinates); the mode with the largest
+    |c_i V[torsion of CW 1, i]| is the one a free-decay run rings at. Linearised at the initial
+    state, no gyroscopic terms (as system_eigenfrequencies). The decay run of a flexible throw
+    costs about 7 ms per step, this analysis about a second.
+    """
+    params.validate()
+    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
+    system, mbs, items = _build(params, reduced, loads=False, reduced_throw=reduced_throw)
+    mbs.Assemble()
+    frequencies, vectors = mbs.ComputeODE2Eigenvalues(convert2Frequencies=True, ignoreAlgebraicEquations=False)
+    frequencies, vectors = np.asarray(frequencies), np.asarray(vectors)
+    torsion = [mbs.GetNodeODE2Index(node) + reduced.torsion_mode for node in items.cw_modal_nodes]
+    released = np.zeros(vectors.shape[0])
+    released[torsion] = 0.1
+    participation = np.linalg.lstsq(vectors, released, rcond=None)[0]
+    amplitude = np.abs(participation * vectors[torsion[0], :]) * (frequencies > 1.0)
+    dominant = int(np.argmax(amplitude))
+    return float(frequencies[dominant]), float(amplitude[dominant])
