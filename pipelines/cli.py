@@ -40,6 +40,9 @@ def _human_summary(outcome) -> str:
              f"  max wear depth {s['max_wear_depth_mm'] * 1000:.2f} µm, dissipated {s['dissipated_energy_mJ']:.4g} mJ"]
     if s.get("min_stick_margin") is not None:
         lines.append(f"  smallest safety margin of stuck points: {s['min_stick_margin']:.3f}")
+    if outcome.stage_times:
+        lines.append("  time: " + ", ".join(f"{name.removesuffix('_s').replace('_', ' ')} {value:.1f} s"
+                                           for name, value in outcome.stage_times.items()))
     lines.append(f"  results: {outcome.results_path}")
     if outcome.plots:
         lines.append(f"  plots:   {Path(outcome.plots[0]).parent}")
@@ -153,11 +156,19 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     handler = getattr(args, "func", None) or getattr(args, "handler")
+    from contact.solver import ConvergenceError
+
     try:
         return handler(args)
     except InputError as error:
         print(f"fretwork: error: {error}", file=sys.stderr)
         return 2
+    except ConvergenceError as error:
+        out = getattr(args, "out", None)
+        hint = (f"\n  partial results stay in {out}; after changing the scene, run again "
+                "(or --resume from its last checkpoint)") if out else ""
+        print(f"fretwork: the simulation stopped: {error}{hint}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("fretwork: interrupted", file=sys.stderr)
         return 130

@@ -72,3 +72,12 @@ def test_reduce_reports_frequency_errors_that_shrink_with_modes(tmp_path, capsys
     assert max(errors[counts[-1]]) < 5e-3
     assert max(errors[counts[-1]]) <= max(errors[counts[0]])
     assert (tmp_path / "red" / "reduction_error_vs_modes.png").exists()
+
+
+def test_a_failing_run_says_why_and_exits_1(coarse_cylinder, tmp_path, capsys):
+    # Pulling the cylinder off the plane under force control: no equilibrium exists.
+    bad = tmp_path / "pull.toml"
+    bad.write_text(coarse_cylinder.read_text().replace("value = -1066.0", "value = 1066.0"))
+    assert main(["run", str(bad), "--out", str(tmp_path / "out"), "--quiet"]) == 1
+    error = capsys.readouterr().err
+    assert "the simulation stopped" in error and "Traceback" not in error
