@@ -11,6 +11,7 @@ import numpy as np
 from mbs.campbell import Campbell, campbell_diagram
 from mbs.counterweight import ReducedCounterweight, reduce_counterweight
 from mbs.excitation import excitation_orders
+from mbs.flexible_throw import reduce_throw
 from mbs.histories import RunHistories
 from mbs.model import simulate, system_eigenfrequencies
 from mbs.parameters import ModelParams
@@ -43,7 +44,8 @@ def run_model(params: ModelParams, out_dir, *, reduced: ReducedCounterweight | N
     """
     out_dir = Path(out_dir)
     reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
-    histories = simulate(params, reduced=reduced)
+    reduced_throw = reduce_throw(params.throw) if "flexible_crankshaft" in params.effects else None
+    histories = simulate(params, reduced=reduced, reduced_throw=reduced_throw)
     steady = slice(len(histories.time) // 2, None)
     torsion = histories.wing_torsion[:, steady].T
     spectra = {"wing_torsion": amplitude_spectrum(histories.time[steady], torsion)}
@@ -53,7 +55,8 @@ def run_model(params: ModelParams, out_dir, *, reduced: ReducedCounterweight | N
         spectra["wing_torsion_orders"] = order_spectrum(histories.time[steady], torsion, params.shaft_speed)
     speeds = campbell_speeds_rpm if campbell_speeds_rpm is not None else np.linspace(0.1, 1.3, 14) * params.speed_rpm
     orders = excitation_orders(params.excitation, params.effects)
-    system = [system_eigenfrequencies(replace(params, speed_rpm=float(s)), reduced, max_frequency=np.inf)[:N_SYSTEM_MODES]
+    system = [system_eigenfrequencies(replace(params, speed_rpm=float(s)), reduced, max_frequency=np.inf,
+                                      reduced_throw=reduced_throw)[:N_SYSTEM_MODES]
               for s in speeds]
     n_common = min(len(f) for f in system)
     campbell = campbell_diagram(reduced, speeds, orders, system_frequencies=np.array([f[:n_common] for f in system]))

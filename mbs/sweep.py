@@ -19,6 +19,7 @@ import numpy as np
 
 from mbs.campbell import Campbell, campbell_diagram
 from mbs.counterweight import reduce_counterweight
+from mbs.flexible_throw import reduce_throw
 from mbs.excitation import excitation_orders
 from mbs.model import SimulationError, simulate, system_eigenfrequencies
 from mbs.parameters import ModelParams
@@ -33,7 +34,7 @@ N_SYSTEM_MODES = 24
 
 @dataclass(frozen=True)
 class SweepResult:
-    """speeds_rpm (n,); wing_amplitude (n, 2) mm: half peak-to-peak of the wing torsion of CW1,
+    """speeds_rpm (n,); wing_amplitude (n, number of CWs) mm: half peak-to-peak of the wing torsion of CW1,
     CW2 in the evaluation window (NaN where the run failed); dominant_frequencies (n, 3) Hz of the
     CW1 wing torsion, strongest first; dominant_orders (n, 3) the same in engine orders;
     real_time_factor (n,); system_frequencies (n, N_SYSTEM_MODES) Hz: coupled model eigenfrequencies;
@@ -108,8 +109,9 @@ def speed_sweep(model_params: ModelParams, speeds, *, path=None,
         raise InputError("sweep speeds must be a non-empty list of positive engine speeds (rpm)")
     model_params.validate()
     reduced = reduce_counterweight(model_params.counterweight, model_params.n_modes)
+    reduced_throw = reduce_throw(model_params.throw) if "flexible_crankshaft" in model_params.effects else None
     n = speeds.size
-    amplitude = np.full((n, 2), np.nan)
+    amplitude = np.full((n, model_params.n_counterweights), np.nan)
     frequencies = np.full((n, N_DOMINANT), np.nan)
     orders = np.full((n, N_DOMINANT), np.nan)
     real_time = np.full(n, np.nan)
@@ -117,11 +119,12 @@ def speed_sweep(model_params: ModelParams, speeds, *, path=None,
     failures = {}
     for i, speed in enumerate(speeds):
         params = replace(model_params, speed_rpm=float(speed))
-        eigen = system_eigenfrequencies(params, reduced, max_frequency=np.inf)[:N_SYSTEM_MODES]
+        eigen = system_eigenfrequencies(params, reduced, max_frequency=np.inf,
+                                        reduced_throw=reduced_throw)[:N_SYSTEM_MODES]
         system[i, : eigen.size] = eigen
         message = None
         try:
-            run = simulate(params, reduced=reduced)
+            run = simulate(params, reduced=reduced, reduced_throw=reduced_throw)
             amplitude[i], frequencies[i], orders[i] = _evaluate(run, params.shaft_speed)
             real_time[i] = run.real_time_factor
         except SimulationError as error:
@@ -154,7 +157,7 @@ def write_sweep(path, result: SweepResult) -> Path:
         group = root.create_group("sweep")
         fields = [
             ("speed", result.speeds_rpm, "rpm", "Engine speeds of the sweep."),
-            ("wing_amplitude", result.wing_amplitude, "mm", "Wing torsion amplitude of CW1, CW2 (NaN: failed)."),
+            ("wing_amplitude", result.wing_amplitude, "mm", "Wing torsion amplitude of CW1, CW2, ... (NaN: failed)."),
             ("dominant_frequencies", result.dominant_frequencies, "Hz", "Strongest CW1 wing-torsion frequencies."),
             ("dominant_orders", result.dominant_orders, "order", "The same frequencies in engine orders."),
             ("real_time_factor", result.real_time_factor, "-", "Simulated seconds per wall-clock second."),

@@ -91,3 +91,13 @@ def test_evenly_spaced_throws_by_default_and_angle_tables_must_match_the_throw_c
         ModelParams(throws=2, crank_angles_deg=(0.0,)).validate()
     with pytest.raises(InputError, match="throws must be a whole number"):
         ModelParams(throws=0).validate()
+
+
+def test_sweep_of_a_two_throw_shaft_reports_every_counterweight():
+    from mbs.sweep import speed_sweep
+
+    params = ModelParams(n_modes=2, throws=2, effects=frozenset({"gear_mesh"}),
+                         solver=SolverParams(revolutions=0.25, time_step=1e-4))
+    result = speed_sweep(params, [700.0, 750.0])
+    assert result.wing_amplitude.shape == (2, 4)
+    assert np.all(result.wing_amplitude > 0)
