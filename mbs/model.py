@@ -2,17 +2,23 @@
 
 Items (exudyn vocabulary):
 
-* two rigid half-throws (journal + web + half crank pin), Tait-Bryan (Rxyz) nodes, joined at
-  the crank pin by a 6-DOF spring-damper standing for pin and web flexibility;
-* main bearings: Cartesian spring-dampers from each journal centre to ground (radial on both,
-  axial on journal 1);
+* per throw, two rigid half-throws (journal + web + half crank pin), Tait-Bryan (Rxyz) nodes,
+  joined at the crank pin by a 6-DOF spring-damper standing for pin and web flexibility; or,
+  with the "flexible_crankshaft" effect, one Craig-Bampton body per throw (mbs.flexible_throw);
+* multi-throw shafts (ModelParams.throws): throw k at z = k x throw_pitch, turned by its crank
+  angle; neighbouring throws share a main journal and are joined there by a 6-DOF journal
+  spring-damper (CrankThrowParams.journal_stiffness);
+* main bearings: Cartesian spring-dampers from each journal centre to ground (radial on all,
+  axial on journal 1); a shared journal's bearing is split half/half on its two halves;
 * drive: the spin coordinate of journal 1 is held at engine speed (velocity-level coordinate
   constraint), or, with the "torsional_vibration" effect, a flywheel held at engine speed is
   coupled to journal 1 by the torsional shaft stiffness;
 * one Craig-Bampton counterweight (ObjectFFRFreducedOrder) per web, its floating frame (= its
-  rigid contact interface) joined rigidly to the web by a generic joint;
-* loads: tangential gas force at the crank pin ("gas_torque"), gear-mesh torque on journal 2
-  ("gear_mesh"). Items of an effect that is off are not created.
+  rigid contact interface) joined rigidly to the web by a generic joint (the same reduced CW
+  for every web);
+* loads: tangential gas force at each crank pin, phase-shifted by the cylinder's firing angle
+  ("gas_torque"), gear-mesh torque on the last journal ("gear_mesh"). Items of an effect that
+  is off are not created.
 
 Units: mm, N, t, s, rad.
 """
