@@ -41,6 +41,8 @@ class Body:
 
     fixed_nodes: node indices whose displacement components ``fixed_components`` are held at
     zero (e.g. the bottom of a plane specimen). reference_points: name → ReferencePoint.
+    body_loads: pattern name → nodal force vector (n_dofs,) N at unit amplitude (gravity,
+    centrifugal or inertia loads); condensed exactly with the body.
     """
 
     name: str
@@ -48,6 +50,7 @@ class Body:
     fixed_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
     fixed_components: tuple[int, ...] = (0, 1)
     reference_points: dict = field(default_factory=dict)
+    body_loads: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -122,7 +125,9 @@ def _condense_body(body: Body, surface: Surface | None, offset: int) -> Condense
             raise InputError(f"body {body.name}: fixed nodes overlap a reference-point coupling")
         if np.intersect1d(fixed, retained).size:
             raise InputError(f"body {body.name}: fixed nodes overlap the contact surface")
-    condensation = condense(stiffness, retained, fixed)
+    loads = {name: vector if coupling is None else coupling.reduce_vector(vector)
+             for name, vector in body.body_loads.items()}
+    condensation = condense(stiffness, retained, fixed, loads or None)
     reference_dofs, start = {}, offset + surface_dofs.size
     for name, dofs in zip(names, reference):
         reference_dofs[name] = np.arange(start, start + dofs.size)
@@ -210,6 +215,10 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     for pattern, vector in load_vectors.items():
         if np.any(vector[prescribed]):
             raise InputError(f"load {pattern!r} acts on a DOF whose motion is prescribed")
+    # Body loads act everywhere; where a DOF is prescribed its share goes to the reaction.
+    for item in condensed.values():
+        for name, vector in item.condensation.loads.items():
+            load_vectors.setdefault(name, np.zeros(n))[item.offset:item.offset + item.size] += vector
     structure = Structure(stiffness=stiffness, contact_operator=G, area=pairing.area,
                           initial_overclosure=pairing.initial_overclosure, dim=dim,
                           prescribed=prescribed, loads=load_vectors, motions=motion_vectors,

@@ -19,6 +19,7 @@ from contact.procedure import LoadProgram, Procedure
 from contact.solver import NewtonSettings
 from pipelines import meshes
 from pipelines.scene import Scene
+from reduction.body_loads import centrifugal, gravity
 from reduction.elasticity import assemble_elastic_body
 from reduction.errors import InputError
 
@@ -125,7 +126,17 @@ def build(scene: Scene, meshes_override: dict | None = None) -> Model:
             nodes = select_nodes(mesh, ref["nodes"], f"bodies.{name}.reference_points.{ref_name}.nodes")
             references[ref_name] = ReferencePoint(nodes, np.asarray(ref["position"], float),
                                                   bool(ref.get("rotations", False)))
-        bodies.append(Body(name, elastic, fixed_nodes, components, references))
+        body_loads = {}
+        for entry in data.get("body_loads", []):
+            if entry["body"] != name:
+                continue
+            if entry["kind"] == "gravity":
+                body_loads[entry["name"]] = gravity(elastic, entry["acceleration"])
+            else:
+                omega = entry["angular_velocity"]
+                body_loads[entry["name"]] = centrifugal(elastic, omega[0] if dim == 2 else omega,
+                                                        entry.get("axis_point"))
+        bodies.append(Body(name, elastic, fixed_nodes, components, references, body_loads))
     contact = data["contact"]
     slave_mesh = built_meshes[contact["slave"]["body"]]
     master_mesh = built_meshes[contact["master"]["body"]]
@@ -144,7 +155,7 @@ def build(scene: Scene, meshes_override: dict | None = None) -> Model:
                   for name, spec in data.get("bolts", {}).items()) if "bolts" in scene.effects else ()
     assembly = assemble(bodies, slave, master, loads=patterns("loads"), motions=patterns("motions"),
                         search_distance=contact.get("search_distance", np.inf), bolts=bolts)
-    shapes = {e["name"]: e["history"] for kind in ("loads", "motions") for e in data.get(kind, [])}
+    shapes = {e["name"]: e["history"] for kind in ("loads", "motions", "body_loads") for e in data.get(kind, [])}
     shapes.update({f"bolt.{bolt.name}": "ramp" for bolt in bolts})
     program = LoadProgram(assembly.structure.patterns, shapes)
     law = ContactLaw(

@@ -110,7 +110,19 @@ PATTERN_KEYS = {
                 "must be 'ramp', 'cyclic' or 'constant'", "time shape"),
 }
 # [mbs] is the multibody model's table, validated by mbs.scene.
-TOP_LEVEL = ("scene", "materials", "bodies", "bolts", "contact", "loads", "motions", "procedure", "mbs")
+BODY_LOAD_KEYS = {
+    "name": (str, True, None, "pattern name"),
+    "body": (str, True, None, "body it acts on"),
+    "kind": (str, True, lambda v: None if v in ("gravity", "centrifugal") else "must be 'gravity' or 'centrifugal'",
+             "load kind"),
+    "acceleration": (list, False, None, "gravity acceleration vector, mm/s²"),
+    "angular_velocity": (list, False, None, "rotation vector, rad/s (centrifugal)"),
+    "axis_point": (list, False, None, "a point of the rotation axis, mm"),
+    "history": (str, True, lambda v: None if v in ("ramp", "cyclic", "constant") else
+                "must be 'ramp', 'cyclic' or 'constant'", "time shape"),
+}
+TOP_LEVEL = ("scene", "materials", "bodies", "bolts", "contact", "loads", "motions", "body_loads",
+             "procedure", "mbs")
 OPTIONAL_TABLES = ("bolts",)
 
 
@@ -238,6 +250,21 @@ def validate(data: dict, source: str = "scene") -> list[str]:
                 dof = entry.get("dof", "")
                 if isinstance(dof, str) and dof.count(".") != 2:
                     problems.append(f"'{kind}[{k}].dof' must read 'body.point.component', got {dof!r}")
+    for k, entry in enumerate(data.get("body_loads", []) if isinstance(data.get("body_loads", []), list) else []):
+        _check_table(entry, BODY_LOAD_KEYS, f"body_loads[{k}]", problems)
+        if not isinstance(entry, dict):
+            continue
+        if entry.get("name") in names:
+            problems.append(f"'body_loads[{k}].name' '{entry['name']}' is used twice")
+        names.add(entry.get("name"))
+        body = data.get("bodies", {}).get(entry.get("body"))
+        if body is None:
+            problems.append(f"'body_loads[{k}].body' must name one of the bodies")
+        elif "density" not in data.get("materials", {}).get(body.get("material"), {}):
+            problems.append(f"'body_loads[{k}]' acts on body '{entry['body']}', whose material has no density")
+        needed = "acceleration" if entry.get("kind") == "gravity" else "angular_velocity"
+        if entry.get("kind") in ("gravity", "centrifugal") and needed not in entry:
+            problems.append(f"'body_loads[{k}].{needed}' is missing for a {entry['kind']} load")
     if not names:
         problems.append("the scene has no [[loads]] or [[motions]]")
     return problems

@@ -65,3 +65,16 @@ def test_effect_not_listed_allocates_no_state(coarse_cylinder):
     assert model.law.cof_rate == 0.0
     model = build(scenes.load(coarse_cylinder))
     assert model.initial_state().wear_depth.shape == (2, model.assembly.structure.n_points)
+
+
+def test_body_load_needs_a_density_and_its_parameters(cylinder_text):
+    text = cylinder_text + '''
+[[body_loads]]
+name = "spin"
+body = "cylinder"
+kind = "centrifugal"
+history = "ramp"
+'''
+    message = _problems(text)
+    assert "whose material has no density" in message
+    assert "'body_loads[0].angular_velocity' is missing" in message
