@@ -18,6 +18,15 @@ def gas_torque_table(shaft_speed: float, excitation: ExcitationParams) -> list[t
             zip(excitation.gas_orders, excitation.gas_torque_amplitudes, excitation.gas_torque_phases)]
 
 
+def cylinder_gas_torque_table(shaft_speed: float, excitation: ExcitationParams,
+                              firing_angle: float) -> list[tuple[float, float, float]]:
+    """Order table of a cylinder that fires firing_angle (rad, within the 720 deg cycle) after
+    cylinder 1: its torque is cylinder 1's delayed by firing_angle / shaft_speed, so order n
+    gets the phase -n x firing_angle."""
+    return [(w, amplitude, phase - (w / shaft_speed) * firing_angle)
+            for w, amplitude, phase in gas_torque_table(shaft_speed, excitation)]
+
+
 def gas_torque(time, shaft_speed: float, excitation: ExcitationParams):
     """Fluctuating gas torque of one cylinder, sum_k T_k cos(order_k * angle + phase_k), N mm."""
     table = np.asarray(gas_torque_table(shaft_speed, excitation))

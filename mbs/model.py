@@ -37,7 +37,7 @@ import numpy as np
 from exudyn.FEM import ObjectFFRFreducedOrderInterface
 
 from mbs.counterweight import ReducedCounterweight, reduce_counterweight
-from mbs.excitation import gas_torque_table
+from mbs.excitation import cylinder_gas_torque_table
 from mbs.flexible_throw import ReducedThrow, reduce_throw
 from mbs.histories import RunHistories, collect_histories
 from mbs.parameters import CrankThrowParams, ModelParams
@@ -279,10 +279,9 @@ def _add_loads(mbs, params: ModelParams, speed: float, items: _Items) -> None:
         return 1.0 if t >= ramp_time else 0.5 * (1.0 - math.cos(math.pi * t / ramp_time))
 
     if "gas_torque" in params.effects:
-        base = gas_torque_table(speed, excitation)
         for marker, k, share in items.pin_markers:
-            firing = params.firing_angles[k]
-            table = [(w, share * amplitude / radius, phase - (w / speed) * firing) for w, amplitude, phase in base]
+            table = [(w, share * amplitude / radius, phase) for w, amplitude, phase
+                     in cylinder_gas_torque_table(speed, excitation, params.firing_angles[k])]
             mbs.AddLoad(_gas_load(marker, table, ramp, items.pin_force_body_fixed, speed, params.throw_angles[k]))
     if "gear_mesh" in params.effects:
         mesh_speed = excitation.gear_teeth * speed

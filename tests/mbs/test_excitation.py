@@ -54,3 +54,22 @@ def test_firing_pressure_peak_gives_half_orders():
                                                            conrod_length=800.0)
     assert mean > 0  # the expansion stroke does net work
     assert amplitudes[list(orders).index(0.5)] > 0.1 * amplitudes.max()
+
+
+def test_a_later_firing_cylinder_delays_the_gas_torque_by_its_firing_angle():
+    from mbs.excitation import cylinder_gas_torque_table
+
+    speed = 750.0 * np.pi / 30.0
+    excitation = ExcitationParams()
+    firing = np.radians(480.0)
+    time = np.linspace(0.0, 0.16, 97)
+    table = np.asarray(cylinder_gas_torque_table(speed, excitation, firing))
+    delayed = (table[:, 1] * np.cos(np.multiply.outer(time, table[:, 0]) + table[:, 2])).sum(axis=1)
+    assert delayed == pytest.approx(gas_torque(time - firing / speed, speed, excitation), abs=1e-6 * 6.4e6)
+    # two cylinders 360 deg apart: the half orders cancel in the sum, the integer orders double
+    pair = np.asarray(cylinder_gas_torque_table(speed, excitation, 0.0) + cylinder_gas_torque_table(speed, excitation, 2 * np.pi))
+    total = (pair[:, 1] * np.cos(np.multiply.outer(time, pair[:, 0]) + pair[:, 2])).sum(axis=1)
+    base = np.asarray(cylinder_gas_torque_table(speed, excitation, 0.0))
+    integer = np.isclose(base[:, 0] / speed % 1.0, 0.0)
+    doubled = 2.0 * (base[integer, 1] * np.cos(np.multiply.outer(time, base[integer, 0]) + base[integer, 2])).sum(axis=1)
+    assert total == pytest.approx(doubled, abs=1e-6 * 6.4e6)
