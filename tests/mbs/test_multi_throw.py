@@ -101,3 +101,22 @@ def test_sweep_of_a_two_throw_shaft_reports_every_counterweight():
     result = speed_sweep(params, [700.0, 750.0])
     assert result.wing_amplitude.shape == (2, 4)
     assert np.all(result.wing_amplitude > 0)
+
+
+@pytest.mark.bench
+def test_energy_drift_of_a_three_throw_shaft_over_100_revolutions(reduced_cw4):
+    params = ModelParams(n_modes=4, effects=QUIET, throws=3,
+                         solver=SolverParams(revolutions=100.0, time_step=5e-5, damping=False, drive="free"))
+    run = simulate(params, reduced=reduced_cw4, energy=True)
+    drift = np.abs(run.energy - run.energy[0]).max() / run.energy[0]
+    print(f"\nthree throws: energy drift over 100 revolutions {drift:.2e}; real-time factor {run.real_time_factor:.3f}")
+    assert drift < 1e-3
+
+
+def test_scene_switches_on_the_flexible_crankshaft(tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[mbs]\nthrows = 2\neffects = ["flexible_crankshaft", "gas_torque"]\n'
+                     "[mbs.throw]\nyoungs_modulus = 200000.0\nflexible_modes = 12\n")
+    params = load_model_params(scene)
+    assert "flexible_crankshaft" in params.effects
+    assert params.throw.youngs_modulus == 200000.0 and params.throw.flexible_modes == 12
