@@ -66,3 +66,18 @@ def test_energy_bookkeeping_refuses_flexible_throws(reduced_cw4, reduced_throw8)
     with pytest.raises(InputError, match="rigid throws only"):
         simulate(params, reduced=reduced_cw4, reduced_throw=reduced_throw8, energy=True)
 
+
+
+@pytest.mark.bench
+def test_free_decay_of_the_flexible_throw_rings_at_the_eigen_analysis_frequency(reduced_cw4, reduced_throw8):
+    from mbs.spectra import peak_frequency
+
+    params = ModelParams(n_modes=4, effects=FLEXIBLE, solver=SolverParams(revolutions=1.0, time_step=5e-5, damping=False))
+    released = np.zeros(reduced_cw4.n_modes)
+    released[reduced_cw4.torsion_mode] = 0.1
+    run = simulate(params, reduced=reduced_cw4, reduced_throw=reduced_throw8, initial_modal_coordinates=released)
+    measured = peak_frequency(run.time, run.wing_torsion[0], band=(100.0, 2000.0))
+    eigen = torsion_decay_mode(params, reduced_cw4, reduced_throw=reduced_throw8)[0]
+    print(f"\nflexible throw: decay {measured:.2f} Hz, eigen-analysis {eigen:.2f} Hz, real-time factor "
+          f"{run.real_time_factor:.4f}")
+    assert abs(measured / eigen - 1.0) < 0.01
