@@ -230,11 +230,15 @@ def validate(data: dict, source: str = "scene") -> list[str]:
                 _check_table(table, schema, f"{parent}.{name}", problems)
         elif section in data:
             _check_table(data[section], schema, section, problems)
-    for check in (_check_effects, _check_bodies, _check_contact, _check_bolts):
+    for check in (_check_effects, _check_bodies, _check_contact, _check_bolts, _check_patterns):
         try:
             check(data, problems)
         except (KeyError, TypeError, AttributeError, ValueError):
             pass  # a malformed table was already reported by the schema check above
+    return problems
+
+
+def _check_patterns(data, problems):
     names = set()
     for kind in ("loads", "motions"):
         entries = data.get(kind, [])
@@ -243,10 +247,11 @@ def validate(data: dict, source: str = "scene") -> list[str]:
             continue
         for k, entry in enumerate(entries):
             _check_table(entry, PATTERN_KEYS, f"{kind}[{k}]", problems)
-            if isinstance(entry, dict) and entry.get("name") in names:
-                problems.append(f"'{kind}[{k}].name' '{entry['name']}' is used twice")
+            name = entry.get("name") if isinstance(entry, dict) else None
+            if isinstance(name, str) and name in names:
+                problems.append(f"'{kind}[{k}].name' '{name}' is used twice")
             if isinstance(entry, dict):
-                names.add(entry.get("name"))
+                names.add(name if isinstance(name, str) else f"<{kind}[{k}]>")
                 dof = entry.get("dof", "")
                 if isinstance(dof, str) and dof.count(".") != 2:
                     problems.append(f"'{kind}[{k}].dof' must read 'body.point.component', got {dof!r}")
@@ -254,9 +259,10 @@ def validate(data: dict, source: str = "scene") -> list[str]:
         _check_table(entry, BODY_LOAD_KEYS, f"body_loads[{k}]", problems)
         if not isinstance(entry, dict):
             continue
-        if entry.get("name") in names:
-            problems.append(f"'body_loads[{k}].name' '{entry['name']}' is used twice")
-        names.add(entry.get("name"))
+        name = entry.get("name")
+        if isinstance(name, str) and name in names:
+            problems.append(f"'body_loads[{k}].name' '{name}' is used twice")
+        names.add(name if isinstance(name, str) else f"<body_loads[{k}]>")
         body = data.get("bodies", {}).get(entry.get("body"))
         if body is None:
             problems.append(f"'body_loads[{k}].body' must name one of the bodies")
@@ -267,7 +273,6 @@ def validate(data: dict, source: str = "scene") -> list[str]:
             problems.append(f"'body_loads[{k}].{needed}' is missing for a {entry['kind']} load")
     if not names:
         problems.append("the scene has no [[loads]] or [[motions]]")
-    return problems
 
 
 def _check_effects(data, problems):
