@@ -125,7 +125,8 @@ class Study:
             "base_overrides": self.base_overrides,
             "knobs": [{"name": k.name, "meaning": k.meaning, "values": list(k.values)} for k in self.knobs],
             "not_applicable": self.not_applicable,
-            "reference": {"settings": self.reference.settings, "values": self.reference.values,
+            "reference": {"settings": self.reference.settings,
+                          "values": {k: v for k, v in self.reference.values.items() if k != "cof_rise"},
                           "verdict": self.reference.verdict, "wall_time_s": self.reference.wall_time_s,
                           "cpu_time_s": self.reference.cpu_time_s},
             "records": self.records, "recommendation": self.recommendation, "plot": self.plot,
@@ -420,9 +421,10 @@ def plot_pareto(study: dict, path: str | Path) -> Path:
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig, ax = plt.subplots(figsize=(10, 6.5))
+    fig, ax = plt.subplots(figsize=(10, 7))
     finished = [r for r in study["records"] if r["failure"] is None]
     front = {id(r) for r in pareto_front(finished)}
+    notes = []  # combinations carry long labels: numbered on the plot, spelled out below it
     for record in finished:
         error = 100 * record["worst_error"]
         marker = "o" if record["verdict_agrees"] else "x"
@@ -430,15 +432,20 @@ def plot_pareto(study: dict, path: str | Path) -> Path:
         ax.scatter(record[COST], error, marker=marker, color=colour, s=40 if id(record) in front else 20,
                    zorder=3)
         worst = max(record["errors"], key=record["errors"].get, default=None)
-        label = record["label"] + (f" [{SHORT_NAMES[worst]}]" if worst and record["worst_error"] > 0 else "")
-        ax.annotate(label, (record[COST], error), fontsize=7, xytext=(4, 3), textcoords="offset points")
+        label = record["label"]
+        if label.startswith("combined"):
+            notes.append(f"C{len(notes) + 1} = {label}")
+            label = f"C{len(notes)}"
+        label += f" [{SHORT_NAMES[worst]}]" if worst and record["worst_error"] > 0 else ""
+        ax.annotate(label, (record[COST], error), fontsize=7, xytext=(4, 3 + 9 * (label[0] == "C") * len(notes)),
+                    textcoords="offset points")
     line = sorted((r[COST], 100 * r["worst_error"]) for r in finished if id(r) in front)
     if line:
         ax.plot(*zip(*line), color="0.6", lw=1, zorder=2, label="Pareto front")
     rec = study["recommendation"]
     if rec:
         ax.scatter(rec[COST], 100 * rec["worst_error"], s=180, facecolors="none", edgecolors="k",
-                   zorder=4, label=f"recommended: {rec['label']}")
+                   zorder=4, label="recommended")
     ax.axhline(100 * TOLERANCE, color="k", ls="--", lw=0.8, label=f"{100 * TOLERANCE:g} % tolerance")
     ax.set_xscale("log")
     ax.set_yscale("symlog", linthresh=0.1)
@@ -454,9 +461,12 @@ def plot_pareto(study: dict, path: str | Path) -> Path:
     if failed:
         title += f"\nnot converged: {'; '.join(failed)}"
     ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=8, loc="lower left")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
+    if rec:
+        notes.append(f"recommended: {rec['label']}")
+    fig.text(0.01, 0.01, "\n".join(notes), fontsize=7, va="bottom")
+    fig.tight_layout(rect=(0, 0.02 + 0.025 * len(notes), 1, 1))
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
