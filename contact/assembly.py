@@ -187,10 +187,36 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
             for comp, dof in zip(_component_names(dim, rotations), dofs):
                 labels[f"{item.body.name}.{ref_name}.{comp}"] = int(dof)
 
-    def pattern_vectors(spec, kind):
+    load_vectors, motion_vectors, prescribed = control_patterns(labels, n, loads, motions)
+    bolt_set = None
+    if bolts:
+        vectors = np.array([bolt_vector(bolt, labels, n) for bolt in bolts])
+        names = tuple(f"bolt.{bolt.name}" for bolt in bolts)
+        for name, bolt, vector in zip(names, bolts, vectors):
+            load_vectors[name] = pretension_pattern(bolt, vector)
+        bolt_set = BoltSet(tuple(bolts), vectors, names)
+    # Body loads act everywhere; where a DOF is prescribed its share goes to the reaction.
+    for item in condensed.values():
+        for name, vector in item.condensation.loads.items():
+            load_vectors.setdefault(name, np.zeros(n))[item.offset:item.offset + item.size] += vector
+    structure = Structure(stiffness=stiffness, contact_operator=G, area=pairing.area,
+                          initial_overclosure=pairing.initial_overclosure, dim=dim,
+                          prescribed=prescribed, loads=load_vectors, motions=motion_vectors,
+                          labels=labels, bolts=bolt_set)
+    return Assembly(structure, condensed, pairing, slave[0], master[0])
+
+
+def control_patterns(labels: dict, n_dofs: int, loads: dict | None, motions: dict | None):
+    """Load and motion patterns on named control DOFs, and the prescribed DOFs.
+
+    loads / motions: pattern name → list of (body, reference point, component, value).
+    Every DOF a motion names is prescribed, also with value 0 (a DOF held in place); a load
+    on a prescribed DOF is an input error. Returns (load vectors, motion vectors, prescribed).
+    """
+    def vectors_of(spec, kind):
         vectors, named = {}, set()
         for pattern, entries in (spec or {}).items():
-            vector = np.zeros(n)
+            vector = np.zeros(n_dofs)
             for body_name, ref_name, comp, value in entries:
                 label = f"{body_name}.{ref_name}.{comp}"
                 if label not in labels:
@@ -201,29 +227,13 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
             vectors[pattern] = vector
         return vectors, named
 
-    load_vectors, _ = pattern_vectors(loads, "load")
-    bolt_set = None
-    if bolts:
-        vectors = np.array([bolt_vector(bolt, labels, n) for bolt in bolts])
-        names = tuple(f"bolt.{bolt.name}" for bolt in bolts)
-        for name, bolt, vector in zip(names, bolts, vectors):
-            load_vectors[name] = pretension_pattern(bolt, vector)
-        bolt_set = BoltSet(tuple(bolts), vectors, names)
-    # Every DOF a motion names is prescribed, also with value 0 (a DOF held in place).
-    motion_vectors, moved = pattern_vectors(motions, "motion")
+    load_vectors, _ = vectors_of(loads, "load")
+    motion_vectors, moved = vectors_of(motions, "motion")
     prescribed = np.array(sorted(moved), dtype=int)
     for pattern, vector in load_vectors.items():
         if np.any(vector[prescribed]):
             raise InputError(f"load {pattern!r} acts on a DOF whose motion is prescribed")
-    # Body loads act everywhere; where a DOF is prescribed its share goes to the reaction.
-    for item in condensed.values():
-        for name, vector in item.condensation.loads.items():
-            load_vectors.setdefault(name, np.zeros(n))[item.offset:item.offset + item.size] += vector
-    structure = Structure(stiffness=stiffness, contact_operator=G, area=pairing.area,
-                          initial_overclosure=pairing.initial_overclosure, dim=dim,
-                          prescribed=prescribed, loads=load_vectors, motions=motion_vectors,
-                          labels=labels, bolts=bolt_set)
-    return Assembly(structure, condensed, pairing, slave[0], master[0])
+    return load_vectors, motion_vectors, prescribed
 
 
 def stored_energy(structure: Structure, displacement: np.ndarray) -> float:

@@ -21,7 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from contact.assembly import Body
+from contact.assembly import Body, control_patterns
 from contact.interface import Pairing, kinematic_operator, pair_surfaces, surface_from_facets
 from contact.law import ContactLaw, ContactState, Response, advance, evaluate, wear_increment
 from contact.linear import tangent_blocks
@@ -117,25 +117,7 @@ def build(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, 
     n_all = offset
     stiffness_all = sp.block_diag(blocks, format="csr")
 
-    def pattern_vectors(spec, kind):
-        vectors = {}
-        for pattern, entries in (spec or {}).items():
-            vector = np.zeros(n_all)
-            for body_name, ref_name, comp, value in entries:
-                label = f"{body_name}.{ref_name}.{comp}"
-                if label not in labels:
-                    raise InputError(f"{kind} {pattern!r}: no control DOF {label!r} "
-                                     f"(available: {', '.join(labels) or 'none'})")
-                vector[labels[label]] += value
-            vectors[pattern] = vector
-        return vectors
-
-    load_vectors, motion_vectors = pattern_vectors(loads, "load"), pattern_vectors(motions, "motion")
-    prescribed = np.unique(np.concatenate(
-        [np.flatnonzero(v) for v in motion_vectors.values()] or [np.zeros(0, dtype=int)])).astype(int)
-    for pattern, vector in load_vectors.items():
-        if np.any(vector[prescribed]):
-            raise InputError(f"load {pattern!r} acts on a DOF whose motion is prescribed")
+    load_vectors, motion_vectors, prescribed = control_patterns(labels, n_all, loads, motions)
     fixed = np.concatenate(fixed_all) if fixed_all else np.zeros(0, dtype=int)
     if np.intersect1d(fixed, prescribed).size:
         raise InputError("a prescribed control DOF is also held fixed")
