@@ -22,9 +22,13 @@ Error measures (all dimensionless, 0.02 = 2 %):
 - verdict: agrees or not; a run with another verdict never qualifies.
 
 The cycle-jump knob keeps the equivalent cycles constant: wear_cycles × J is fixed.
-Craig–Bampton modes and the multibody time step belong to the multibody model; contact
-scenes list them as not applicable. Each run records its wall time and the CPU time of this
-process (build and condensation plus the procedure, s). The cost that ranks runs (Pareto front,
+Craig–Bampton modes and the multibody time step belong to the multibody model: a scene with an
+[mbs] table and no [contact] is studied on those two knobs, its decision quantity the wing
+amplitude (largest |wing torsion| of any counterweight over the second half of the run, mm);
+contact scenes list them as not applicable, and multibody scenes the contact knobs.
+
+Each run records its wall time and the CPU time of this process (build and condensation plus
+the procedure, or the simulation, s). The cost that ranks runs (Pareto front,
 recommendation) is the CPU time: on a shared machine the wall time of one setting varied 5x
 between two identical runs, the CPU time far less. Runs use one BLAS thread (threadpoolctl, when
 installed): the contact-space systems are small and dense, and two OpenBLAS threads on a loaded
@@ -61,12 +65,13 @@ from reduction.errors import InputError
 
 TOLERANCE = 0.02
 COST = "cpu_time_s"
-SCALAR_QUANTITIES = ("max_wear_depth_mm", "slip_area_fraction", "clamp_force_loss_fraction")
-QUANTITIES = ("max_wear_depth_mm", "cof_map", "slip_area_fraction", "clamp_force_loss_fraction")
-FLOORS = {"max_wear_depth_mm": 1e-6, "slip_area_fraction": 0.01, "clamp_force_loss_fraction": 0.01}
+SCALAR_QUANTITIES = ("max_wear_depth_mm", "slip_area_fraction", "clamp_force_loss_fraction", "wing_amplitude_mm")
+QUANTITIES = ("max_wear_depth_mm", "cof_map", "slip_area_fraction", "clamp_force_loss_fraction", "wing_amplitude_mm")
+FLOORS = {"max_wear_depth_mm": 1e-6, "slip_area_fraction": 0.01, "clamp_force_loss_fraction": 0.01,
+          "wing_amplitude_mm": 1e-6}
 MULTIBODY_KNOBS = {
-    "craig_bampton_modes": "multibody model only (mbs); this scene has no flexible multibody bodies",
-    "mbs_time_step": "multibody model only (mbs); this scene has no time integration",
+    "craig_bampton_modes": "multibody scenes only ([mbs] without [contact]); this is a contact scene",
+    "mbs_time_step": "multibody scenes only ([mbs] without [contact]); this is a contact scene",
 }
 # Caps of the base run's cycle counts (the cycle jump is kept: raising it makes explicit
 # wear unstable): a study runs the scene a dozen times.
@@ -350,37 +355,53 @@ def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: di
     sweeps: knob name → values replacing its default sweep. on_run: called with each record.
     """
     scene_path = Path(scene_path)
+    if _is_multibody(scene_path):
+        return multibody_study(scene_path, quick=quick, overrides=overrides, sweeps=sweeps, on_run=on_run)
     scene = scenes.load(scene_path)
     base = {**base_overrides(scene, quick), **(overrides or {})}
     scene = scenes.load(scene_path, base)
     knobs, not_applicable = knobs_for(scene, quick)
+    knobs = _apply_sweeps(knobs, sweeps, scene.name)
+    for knob in knobs:
+        if knob.name == "contact_size":
+            _check_contact_sizes(scene_path, scene, base, knob)
+
+    def execute(settings, varied, label):
+        return run_setting(scene_path, {**base, **setting_overrides(scene, settings)}, label, settings, varied)
+
+    reference, records, recommendation = _sweep(knobs, execute, lambda s: setting_overrides(scene, s), on_run)
+    return Study(scene.name, str(scene_path), base, knobs, not_applicable, reference, records, recommendation)
+
+
+def _apply_sweeps(knobs: list[Knob], sweeps: dict | None, scene_name: str) -> list[Knob]:
     by_name = {k.name: k for k in knobs}
     for name, values in (sweeps or {}).items():
         if name not in by_name:
-            raise InputError(f"knob '{name}' does not apply to scene {scene.name} "
+            raise InputError(f"knob '{name}' does not apply to scene {scene_name} "
                              f"(applicable: {', '.join(by_name)})")
         if not values:
             raise InputError(f"knob '{name}' needs at least one value")
         by_name[name] = replace(by_name[name], values=by_name[name].ordered(values))
-    knobs = [by_name[k.name] for k in knobs]
-    if "contact_size" in by_name:
-        _check_contact_sizes(scene_path, scene, base, by_name["contact_size"])
+    return [by_name[k.name] for k in knobs]
+
+
+def _sweep(knobs: list[Knob], execute: Callable, overrides_of: Callable, on_run) -> tuple[Run, list, dict | None]:
+    """Reference, one-knob runs, combinations; the records and the recommendation."""
     reference_settings = {k.name: k.values[0] for k in knobs}
 
-    def execute(settings, varied):
-        label = _label(knobs, settings, reference_settings)
-        return run_setting(scene_path, {**base, **setting_overrides(scene, settings)}, label, settings, varied)
+    def run(settings, varied):
+        return execute(settings, varied, _label(knobs, settings, reference_settings))
 
-    reference = execute(reference_settings, ())
+    reference = run(reference_settings, ())
     if reference.failure:
-        raise InputError(f"{scene_path}: the reference run (finest setting of every knob) did not converge: "
+        raise InputError(f"the reference run (finest setting of every knob) did not converge: "
                          f"{reference.failure}")
     records = [_record(reference, reference)]
     if on_run:
         on_run(records[-1])
     for knob in knobs:
         for value in knob.values[1:]:
-            records.append(_record(execute({**reference_settings, knob.name: value}, (knob.name,)), reference))
+            records.append(_record(run({**reference_settings, knob.name: value}, (knob.name,)), reference))
             if on_run:
                 on_run(records[-1])
     combined = _combined(knobs, records, reference_settings)
@@ -388,7 +409,7 @@ def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: di
         varied = tuple(k.name for k in knobs if combined[k.name] != reference_settings[k.name])
         if len(varied) < 2:
             break
-        records.append(_record(execute(combined, varied), reference))
+        records.append(_record(run(combined, varied), reference))
         records[-1]["label"] = "combined: " + records[-1]["label"]
         if on_run:
             on_run(records[-1])
@@ -398,14 +419,14 @@ def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: di
     best = recommend(records)
     recommendation = None if best is None else {
         "label": best["label"], "settings": best["settings"],
-        "overrides": setting_overrides(scene, best["settings"]), "wall_time_s": best["wall_time_s"],
+        "overrides": overrides_of(best["settings"]), "wall_time_s": best["wall_time_s"],
         "cpu_time_s": best["cpu_time_s"], "worst_error": best["worst_error"],
         "speedup": reference.cpu_time_s / best["cpu_time_s"]}
-    return Study(scene.name, str(scene_path), base, knobs, not_applicable, reference, records, recommendation)
+    return reference, records, recommendation
 
 
 SHORT_NAMES = {"max_wear_depth_mm": "wear", "cof_map": "COF map", "slip_area_fraction": "slip area",
-               "clamp_force_loss_fraction": "clamp loss"}
+               "clamp_force_loss_fraction": "clamp loss", "wing_amplitude_mm": "wing amplitude"}
 
 
 def plot_pareto(study: dict, path: str | Path) -> Path:
@@ -476,7 +497,7 @@ def table_lines(study: Study) -> list[str]:
     """The study as text: one line per run, then the recommendation."""
     names = [q for q in QUANTITIES if any(q in r["errors"] for r in study.records)]
     ref = study.reference
-    lines = [f"scene {study.scene}: reference {ref.verdict}, CPU {ref.cpu_time_s:.1f} s "
+    lines = [f"scene {study.scene}: reference {ref.verdict or 'without verdict'}, CPU {ref.cpu_time_s:.1f} s "
              f"(wall {ref.wall_time_s:.1f} s); "
              + ", ".join(f"{q} {ref.values[q]:.6g}" for q in SCALAR_QUANTITIES if ref.values.get(q) is not None),
              f"  base overrides: {study.base_overrides or 'none'}",
@@ -559,3 +580,73 @@ def add_accuracy_parser(kinds) -> None:
     parser.add_argument("--knob", action="append", default=[], metavar="NAME=V1,V2",
                         help="replace a knob's sweep, e.g. contact_size=3,4,6 (repeat)")
     parser.set_defaults(func=cmd_accuracy)
+
+
+CONTACT_KNOBS = ("contact_size", "increments_per_cycle", "normal_stiffness", "critical_slip", "cycle_jump",
+                 "cof_cycles")
+
+
+def _is_multibody(path: Path) -> bool:
+    """A multibody scene: an [mbs] table and no contact interface."""
+    if not path.is_file():
+        return False
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError:
+        return False
+    return "mbs" in data and "contact" not in data
+
+
+def multibody_knobs(params, quick: bool) -> list[Knob]:
+    """Craig–Bampton modes per counterweight and the integration time step (s), finest first."""
+    modes, step = params.n_modes, params.solver.time_step
+    return [Knob("craig_bampton_modes", "Craig–Bampton modes per counterweight",
+                 (modes, max(1, modes // 2)) if quick else tuple(dict.fromkeys((2 * modes, modes, max(1, modes // 2)))),
+                 True),
+            Knob("mbs_time_step", "multibody time step, s", (step, 2 * step) if quick else (step / 2, step, 2 * step),
+                 False)]
+
+
+def _multibody_overrides(settings: dict) -> dict:
+    return {("mbs.n_modes" if name == "craig_bampton_modes" else "mbs.solver.time_step"):
+            (int(value) if name == "craig_bampton_modes" else float(value)) for name, value in settings.items()}
+
+
+def run_multibody_setting(scene_path: Path, overrides: dict, label: str, settings: dict, varied: tuple) -> Run:
+    """Simulate the multibody model with ``overrides``; the decision quantity is the wing amplitude:
+    the largest |wing torsion| (mm) of any counterweight over the second half of the run."""
+    from mbs.model import simulate
+    from mbs.scene import model_params_from_mapping
+
+    data = tomllib.loads(scene_path.read_text())
+    scenes.apply_overrides(data, overrides)
+    params = model_params_from_mapping(data.get("mbs", {}), where=f"{scene_path}: [mbs]", folder=scene_path.parent)
+    record = Run(label, dict(settings), varied)
+    clock, cpu = time.perf_counter(), time.process_time()
+    with threadpool_limits(limits=1, user_api="blas") if threadpool_limits else nullcontext():
+        histories = simulate(params)
+    record.wall_time_s = time.perf_counter() - clock
+    record.cpu_time_s = time.process_time() - cpu
+    steady = histories.wing_torsion[:, len(histories.time) // 2:]
+    record.values = {"wing_amplitude_mm": float(np.abs(steady).max())}
+    return record
+
+
+def multibody_study(scene_path: Path, *, quick: bool = False, overrides: dict | None = None,
+                    sweeps: dict | None = None, on_run: Callable[[dict], None] | None = None) -> Study:
+    """The accuracy study of a multibody scene ([mbs] table): CB modes and time step."""
+    from mbs.scene import model_params_from_mapping
+
+    data = tomllib.loads(scene_path.read_text())
+    base = dict(overrides or {})
+    scenes.apply_overrides(data, base)
+    params = model_params_from_mapping(data.get("mbs", {}), where=f"{scene_path}: [mbs]", folder=scene_path.parent)
+    name = data.get("scene", {}).get("name", scene_path.stem)
+    knobs = _apply_sweeps(multibody_knobs(params, quick), sweeps, name)
+    not_applicable = {knob: "contact scenes only; this scene has no contact interface" for knob in CONTACT_KNOBS}
+
+    def execute(settings, varied, label):
+        return run_multibody_setting(scene_path, {**base, **_multibody_overrides(settings)}, label, settings, varied)
+
+    reference, records, recommendation = _sweep(knobs, execute, _multibody_overrides, on_run)
+    return Study(name, str(scene_path), base, knobs, not_applicable, reference, records, recommendation)

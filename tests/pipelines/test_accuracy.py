@@ -118,3 +118,16 @@ def test_a_failing_combination_steps_back_the_knob_that_erred_most_alone():
     combined = {"contact_size": 0.2, "cycle_jump": 2000.0}
     assert _step_back(knobs, records, combined, ("contact_size", "cycle_jump")) == {
         "contact_size": 0.1, "cycle_jump": 2000.0}
+
+
+def test_multibody_scene_sweeps_modes_and_time_step(tmp_path):
+    scene = tmp_path / "cw.toml"
+    scene.write_text('[scene]\nname = "cw"\n\n[mbs]\nspeed_rpm = 750.0\nn_modes = 4\n\n'
+                     '[mbs.solver]\nrevolutions = 1.0\ntime_step = 1.0e-4\n')
+    study = accuracy_study(scene, quick=True, sweeps={"craig_bampton_modes": [4, 2]})
+    assert [r["label"] for r in study.records] == ["reference", "craig_bampton_modes=2", "mbs_time_step=0.0002"]
+    reference, *others = study.records
+    assert reference["errors"] == {"wing_amplitude_mm": 0.0} and reference["values"]["wing_amplitude_mm"] > 0
+    assert all(np.isfinite(r["errors"]["wing_amplitude_mm"]) and r["cpu_time_s"] > 0 for r in others)
+    assert "contact_size" in study.not_applicable
+    assert study.recommendation["overrides"].keys() == {"mbs.n_modes", "mbs.solver.time_step"}
