@@ -471,7 +471,7 @@ def plot_pareto(study: dict, path: str | Path) -> Path:
     ax.set_xscale("log")
     ax.set_yscale("symlog", linthresh=0.1)
     ax.set_ylim(bottom=0.0, top=3 * max([100 * r["worst_error"] for r in finished] + [100 * TOLERANCE]))
-    ax.set_xlabel("CPU time of the run (build + procedure, one BLAS thread) [s]")
+    ax.set_xlabel("CPU time of the run (build and solve, one BLAS thread) [s]")
     ax.set_ylabel("worst decision-quantity error [%]  (x: verdict differs)")
     reference = study["reference"]["settings"]
     title = (f"accuracy vs time: {study['scene']}\nreference: "
@@ -509,7 +509,7 @@ def table_lines(study: Study) -> list[str]:
         errs = " ".join(f"{100 * r['errors'][q]:>13.2f}%" if q in r["errors"] else f"{'-':>14}" for q in names)
         mark = "" if r["verdict_agrees"] else " (differs)"
         lines.append(f"  {r['label']:<44} {r['cpu_time_s']:>7.1f} {r['wall_time_s']:>7.1f} {errs}  "
-                     f"{r['verdict']}{mark}")
+                     f"{r['verdict'] or '-'}{mark}")
     for name, why in study.not_applicable.items():
         lines.append(f"  not applicable: {name}: {why}")
     rec = study.recommendation
