@@ -36,7 +36,8 @@ def _human_summary(outcome) -> str:
     lines = [f"scene {s['scene']}: verdict {s['verdict'].upper()}"
              f"{'' if s['stationary'] else ' (not yet stationary)'} after {s['cycles_run']} cycles",
              f"  stick {s['stick_area_fraction']:.1%}, slip {s['slip_area_fraction']:.1%}, "
-             f"damaged {s['damaged_area_fraction']:.1%} of the nominal contact area",
+             f"damaged {s['damaged_area_fraction']:.1%} of the contact area after the preload"
+             + (" (wear has widened the contact)" if s['slip_area_fraction'] + s['stick_area_fraction'] > 1.0 else ""),
              f"  max wear depth {s['max_wear_depth_mm'] * 1000:.2f} µm, dissipated {s['dissipated_energy_mJ']:.4g} mJ"]
     if s.get("min_stick_margin") is not None:
         lines.append(f"  smallest safety margin of stuck points: {s['min_stick_margin']:.3f}")
