@@ -43,6 +43,6 @@ def test_accuracy_study_on_shipped_scene(scene, capsys, tmp_path):
     assert (OUT / f"accuracy_{scene}.png").stat().st_size > 10_000
     recommendation = study["recommendation"]
     with capsys.disabled():
-        print(f"\n{scene}: reference {reference['wall_time_s']:.1f} s; recommended "
-              + (f"{recommendation['label']} ({recommendation['wall_time_s']:.1f} s, worst error "
+        print(f"\n{scene}: reference CPU {reference['cpu_time_s']:.1f} s; recommended "
+              + (f"{recommendation['label']} (CPU {recommendation['cpu_time_s']:.1f} s, worst error "
                  f"{100 * recommendation['worst_error']:.2f} %)" if recommendation else "none within 2 %"))
