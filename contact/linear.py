@@ -115,7 +115,7 @@ class NewtonLinearSolver:
         else:
             working = reference
         closed = (working[:, None] * dim + np.arange(dim)).ravel()
-        space, m = self.space, self.space.n_control
+        space = self.space
         closed_blocks = blocks[working]
         W_cc = self._closed_compliance(closed)
         E_c = space.E[closed]

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from contact.law import ContactState, Status, utilised_cof
+from contact.law import ContactState, Status
 from contact.solver import ContactSolver, Effects, Equilibrium
 
 PHASES = ("preload", "cof", "wear")
@@ -364,4 +364,4 @@ def _utilisation(equilibrium: Equilibrium, solver: ContactSolver) -> tuple[np.nd
 
 
 __all__ = ["LoadProgram", "Procedure", "run", "Observer", "CycleSummary", "IncrementRecord",
-           "RunResult", "cycle_figures", "utilised_cof"]
+           "RunResult", "Snapshot", "cycle_figures"]

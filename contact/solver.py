@@ -10,7 +10,7 @@ in sub-steps. History variables advance only from converged sub-steps.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 

@@ -112,7 +112,6 @@ def reduce_throw(throw: CrankThrowParams, n_modes: int | None = None) -> Reduced
     if not np.array_equal(body.node_dofs, np.arange(3 * n_nodes).reshape(n_nodes, 3)):
         raise InputError("throw DOFs are not node-interleaved as exudyn requires")
     tolerance = 1e-6 * throw.bearing_z
-    web_out = 0.5 * throw.pin_length + throw.web_thickness
     on_cw_face = np.abs(xyz[:, 0] + throw.counterweight_radius) < tolerance
     interfaces = [
         np.nonzero(np.abs(xyz[:, 2] + throw.bearing_z) < tolerance)[0],
