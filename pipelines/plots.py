@@ -50,9 +50,14 @@ def _path_plot(coordinates, final, names, a, b, title, out_dir) -> Path:
     on_line = np.abs(coordinates[:, b] - line_value) < 1e-6 * np.ptp(coordinates[:, a])
     order = np.flatnonzero(on_line)[np.argsort(coordinates[on_line, a])]
     shown = [n for n in ("pressure", "slip_range", "cof", "wear_depth") if n in names]
+    x = coordinates[order, a]
+    spacing = np.diff(x)
+    # No line across a hole: break it where the gap is far wider than the mesh spacing.
+    breaks = np.flatnonzero(spacing > 2.5 * np.median(spacing)) + 1 if spacing.size else []
     fig, axes = plt.subplots(len(shown), 1, figsize=(7, 1.9 * len(shown)), sharex=True)
     for ax, name in zip(np.atleast_1d(axes), shown):
-        ax.plot(coordinates[order, a], _field(final, name)[order], "o-", ms=2.5, lw=1.2)
+        values = _field(final, name)[order].astype(float)
+        ax.plot(np.insert(x, breaks, np.nan), np.insert(values, breaks, np.nan), "o-", ms=2.5, lw=1.2)
         ax.set_ylabel(FIELD_LABELS[name], fontsize=7)
         ax.grid(alpha=0.3)
     np.atleast_1d(axes)[-1].set_xlabel(f"{'xyz'[a]} along {'xyz'[b]} = {line_value:g} mm [mm]")
