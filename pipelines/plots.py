@@ -125,7 +125,11 @@ def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
         cycles = file["cycles"]
         if "figures" in cycles:
             figures = cycles["figures"]
-            n = cycles["equivalent_cycles"][()]
+            # Simulated cycles on the axis: with cycle jumping the COF phase would otherwise be
+            # squeezed against zero by the wear phase's equivalent cycles.
+            n = cycles["cycle"][()]
+            phase = cycles["phase"][()]
+            equivalent = cycles["equivalent_cycles"][()]
             clamp = figures.get("clamp_force_N")
             has_clamp = clamp is not None and np.any(np.isfinite(clamp[()]))
             fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(7, 5 if has_clamp else 3), sharex=True)
@@ -141,7 +145,17 @@ def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
                 axes[1].plot(n, clamp[()] / 1000.0, color="k")
                 axes[1].set_ylabel("clamp (bolt) force [kN]")
                 axes[1].grid(alpha=0.3)
-            axes[-1].set_xlabel("equivalent load cycles")
+            wear = np.flatnonzero(phase == 2)
+            label = "simulated load cycle"
+            if wear.size:
+                start = n[wear[0]] - 0.5
+                for ax in axes:
+                    ax.axvline(start, color="grey", ls="--", lw=0.8)
+                axes[0].text(start, 1.0, " wear phase", transform=axes[0].get_xaxis_transform(),
+                             va="top", fontsize=7, color="grey")
+                jump = (equivalent[wear[-1]] - (equivalent[wear[0] - 1] if wear[0] else 0.0)) / wear.size
+                label += f" (wear phase: each stands for {jump:g} real cycles; {equivalent[-1]:g} in all)"
+            axes[-1].set_xlabel(label)
             fig.suptitle(f"{title}: contact condition over cycles")
             fig.tight_layout()
             target = out_dir / "cycles.png"
