@@ -46,8 +46,16 @@ class Model:
                                     self.scene.data["contact"]["cof_initial"], wear_bodies)
 
 
-def select_points(coordinates: np.ndarray, selection: dict, where: str) -> np.ndarray:
-    """Boolean mask of points (n, dim) inside a box or on a plane (mm, tolerance 1e-6·size)."""
+def select_points(coordinates: np.ndarray, selection: dict, where: str, sets=None) -> np.ndarray:
+    """Boolean mask of points (n, dim): a named node set of the mesh file (``sets``, a
+    :class:`reduction.mesh_io.MeshModel`), a box, a ring or a plane (mm, tolerance 1e-6·size)."""
+    if "set" in selection:
+        if sets is None:
+            raise InputError(f"'{where}.set' names a node set, but the body's mesh is generated, "
+                             "not read from a file with named sets")
+        mask = np.zeros(len(coordinates), dtype=bool)
+        mask[sets.node_set(selection["set"])] = True
+        return mask
     if "box" in selection:
         low, high = (np.asarray(c, dtype=float) for c in selection["box"])
         return np.all((coordinates >= low) & (coordinates <= high), axis=1)
@@ -64,17 +72,17 @@ def select_points(coordinates: np.ndarray, selection: dict, where: str) -> np.nd
     return np.abs(coordinates[:, axis] - selection["value"]) <= tolerance
 
 
-def select_nodes(mesh, selection: dict, where: str) -> np.ndarray:
-    nodes = np.flatnonzero(select_points(mesh.p.T, selection, where))
+def select_nodes(mesh, selection: dict, where: str, sets=None) -> np.ndarray:
+    nodes = np.flatnonzero(select_points(mesh.p.T, selection, where, sets))
     if nodes.size == 0:
         raise InputError(f"'{where}' selects no nodes of the mesh; check its coordinates")
     return nodes
 
 
-def select_facets(mesh, selection: dict, where: str) -> np.ndarray:
+def select_facets(mesh, selection: dict, where: str, sets=None) -> np.ndarray:
     """Boundary facets whose nodes all lie in the selection."""
     boundary = mesh.boundary_facets()
-    inside = select_points(mesh.p.T, selection, where)
+    inside = select_points(mesh.p.T, selection, where, sets)
     facets = boundary[np.all(inside[mesh.facets[:, boundary]], axis=0)]
     if facets.size == 0:
         raise InputError(f"'{where}' selects no boundary facets of the mesh; check the box or plane")
@@ -82,11 +90,12 @@ def select_facets(mesh, selection: dict, where: str) -> np.ndarray:
 
 
 def make_mesh(spec: dict, where: str, base: Path | None):
+    """The body's mesh and, for a mesh file, its named sets (None for generated meshes)."""
     if "generator" in spec:
         generator = spec["generator"]
         args = {k: v for k, v in spec.items() if k != "generator"}
         try:
-            return getattr(meshes, generator)(**args)
+            return getattr(meshes, generator)(**args), None
         except TypeError as error:
             raise InputError(f"'{where}': {error}") from None
     path = Path(spec["file"])
@@ -97,7 +106,10 @@ def make_mesh(spec: dict, where: str, base: Path | None):
     except ImportError:
         raise InputError(f"'{where}.file': reading mesh files needs reduction.mesh_io, "
                          "which is not available in this installation") from None
-    return read_mesh(path).mesh
+    if not path.is_file():
+        raise InputError(f"'{where}.file': {path} does not exist")
+    model = read_mesh(path)
+    return model.mesh, model
 
 
 def build(scene: Scene, meshes_override: dict | None = None) -> Model:
@@ -109,9 +121,15 @@ def build(scene: Scene, meshes_override: dict | None = None) -> Model:
     data = scene.data
     dim = scene.dimension
     base = scene.path.parent if scene.path else None
-    bodies, built_meshes = [], {}
+    bodies, built_meshes, named_sets = [], {}, {}
     for name, spec in data["bodies"].items():
-        mesh = (meshes_override or {}).get(name) or make_mesh(spec["mesh"], f"bodies.{name}.mesh", base)
+        override = (meshes_override or {}).get(name)
+        if override is None or "file" in spec["mesh"]:
+            mesh, sets = make_mesh(spec["mesh"], f"bodies.{name}.mesh", base)
+        else:
+            sets = None
+        mesh = mesh if override is None else override
+        named_sets[name] = sets
         if mesh.dim() != dim:
             raise InputError(f"'bodies.{name}.mesh' is {mesh.dim()}D but the scene is {dim}D")
         built_meshes[name] = mesh
@@ -119,11 +137,12 @@ def build(scene: Scene, meshes_override: dict | None = None) -> Model:
         elastic = assemble_elastic_body(mesh, material["youngs_modulus"], material["poisson_ratio"],
                                         material.get("density"))
         fixed = spec.get("fixed")
-        fixed_nodes = select_nodes(mesh, fixed["nodes"], f"bodies.{name}.fixed.nodes") if fixed else np.zeros(0, int)
+        fixed_nodes = (select_nodes(mesh, fixed["nodes"], f"bodies.{name}.fixed.nodes", sets) if fixed
+                       else np.zeros(0, int))
         components = tuple(COMPONENTS[c] for c in (fixed or {}).get("components", ["ux", "uy", "uz"][:dim]))
         references = {}
         for ref_name, ref in spec.get("reference_points", {}).items():
-            nodes = select_nodes(mesh, ref["nodes"], f"bodies.{name}.reference_points.{ref_name}.nodes")
+            nodes = select_nodes(mesh, ref["nodes"], f"bodies.{name}.reference_points.{ref_name}.nodes", sets)
             references[ref_name] = ReferencePoint(nodes, np.asarray(ref["position"], float),
                                                   bool(ref.get("rotations", False)))
         body_loads = {}
@@ -140,8 +159,10 @@ def build(scene: Scene, meshes_override: dict | None = None) -> Model:
     contact = data["contact"]
     slave_mesh = built_meshes[contact["slave"]["body"]]
     master_mesh = built_meshes[contact["master"]["body"]]
-    slave = (contact["slave"]["body"], select_facets(slave_mesh, contact["slave"], "contact.slave"))
-    master = (contact["master"]["body"], select_facets(master_mesh, contact["master"], "contact.master"))
+    slave = (contact["slave"]["body"], select_facets(slave_mesh, contact["slave"], "contact.slave",
+                                                     named_sets[contact["slave"]["body"]]))
+    master = (contact["master"]["body"], select_facets(master_mesh, contact["master"], "contact.master",
+                                                       named_sets[contact["master"]["body"]]))
 
     def patterns(kind):
         out = {}

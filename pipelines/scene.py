@@ -184,8 +184,13 @@ def _check_selection(selection, where, dim, problems):
     keys = set(selection) - {"body"}
     if not keys:
         problems.append(f"'{where}' needs a selection: box = [[min...], [max...]], axis = ... with "
-                        "value = ..., or ring = {{ center, axis, inner_radius, outer_radius }}")
+                        "value = ..., ring = {{ center, axis, inner_radius, outer_radius }}, "
+                        "or set = \"name\" (a node set of the mesh file)")
     for key in keys:
+        if key == "set":
+            if not isinstance(selection["set"], str) or not selection["set"]:
+                problems.append(f"'{where}.set' must be the name of a node set of the body's mesh file")
+            continue
         if key == "ring":
             ring = selection["ring"]
             if not (isinstance(ring, dict) and isinstance(ring.get("center"), list) and len(ring["center"]) == dim
