@@ -85,7 +85,8 @@ class Assembly:
     master_body: str
 
 
-def _component_names(dim: int, rotations: bool) -> list[str]:
+def component_names(dim: int, rotations: bool) -> list[str]:
+    """Labels of a reference point's DOFs: ux, uy[, uz] and, with rotations, rz or rx, ry, rz."""
     names = ["ux", "uy", "uz"][:dim]
     if rotations:
         names += ["rz"] if dim == 2 else ["rx", "ry", "rz"]
@@ -167,12 +168,7 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     for item in condensed.values():
         index = slice(item.offset, item.offset + item.size)
         stiffness[index, index] = item.condensation.stiffness
-    pairing = pair_surfaces(surfaces[slave[0]], surfaces[master[0]], search_distance=search_distance)
-    if initial_gap is not None:
-        gap = np.asarray(initial_gap, dtype=float)
-        if gap.shape != pairing.initial_overclosure.shape:
-            raise InputError(f"initial gap has {gap.size} values for {pairing.n_points} contact points")
-        pairing = Pairing(**{**pairing.__dict__, "initial_overclosure": -gap})
+    pairing = pair_with_gap(surfaces[slave[0]], surfaces[master[0]], search_distance, initial_gap)
     dim = pairing.normal.shape[1]
 
     def surface_dofs(name):
@@ -184,7 +180,7 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     for item in condensed.values():
         for ref_name, dofs in item.reference_dofs.items():
             rotations = item.body.reference_points[ref_name].rotations
-            for comp, dof in zip(_component_names(dim, rotations), dofs):
+            for comp, dof in zip(component_names(dim, rotations), dofs):
                 labels[f"{item.body.name}.{ref_name}.{comp}"] = int(dof)
 
     load_vectors, motion_vectors, prescribed = control_patterns(labels, n, loads, motions)
@@ -204,6 +200,19 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
                           prescribed=prescribed, loads=load_vectors, motions=motion_vectors,
                           labels=labels, bolts=bolt_set)
     return Assembly(structure, condensed, pairing, slave[0], master[0])
+
+
+def pair_with_gap(slave: Surface, master: Surface, search_distance: float,
+                  initial_gap: np.ndarray | None) -> Pairing:
+    """Pair the surfaces; ``initial_gap`` (n_slave_points,) mm, when given, replaces the
+    geometric gap (an analytic profile on flat meshes)."""
+    pairing = pair_surfaces(slave, master, search_distance=search_distance)
+    if initial_gap is None:
+        return pairing
+    gap = np.asarray(initial_gap, dtype=float)
+    if gap.shape != pairing.initial_overclosure.shape:
+        raise InputError(f"initial gap has {gap.size} values for {pairing.n_points} contact points")
+    return Pairing(**{**pairing.__dict__, "initial_overclosure": -gap})
 
 
 def control_patterns(labels: dict, n_dofs: int, loads: dict | None, motions: dict | None):

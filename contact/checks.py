@@ -4,17 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from contact.law import ContactLaw, ContactState, Response, evaluate
-
-
-def tangent_matrix(response: Response) -> np.ndarray:
-    """The law's consistent tangent ∂[p, τ]/∂[h, Δs] per point, (n, dim, dim)."""
-    n, n_tangent = response.shear.shape
-    jac = np.zeros((n, 1 + n_tangent, 1 + n_tangent))
-    jac[:, 0, 0] = response.dpressure_dh
-    jac[:, 1:, 0] = response.dshear_dh
-    jac[:, 1:, 1:] = response.dshear_ds
-    return jac
+from contact.law import ContactLaw, ContactState, evaluate
 
 
 def finite_difference_tangent(overclosure: np.ndarray, slip_increment: np.ndarray, state: ContactState,
@@ -37,7 +27,7 @@ def finite_difference_tangent(overclosure: np.ndarray, slip_increment: np.ndarra
 
 def tangent_error(overclosure, slip_increment, state, law, step: float = 1e-9) -> float:
     """Largest per-point relative difference between the consistent and the FD tangent."""
-    analytic = tangent_matrix(evaluate(overclosure, slip_increment, state, law))
+    analytic = evaluate(overclosure, slip_increment, state, law).tangent()
     numeric = finite_difference_tangent(overclosure, slip_increment, state, law, step)
     scale = np.maximum(np.abs(analytic).max(axis=(1, 2)), 1e-300)[:, None, None]
     return float(np.max(np.abs(numeric - analytic) / scale))

@@ -21,8 +21,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from contact.assembly import Body, control_patterns
-from contact.interface import Pairing, kinematic_operator, pair_surfaces, surface_from_facets
+from contact.assembly import Body, component_names, control_patterns, pair_with_gap
+from contact.interface import Pairing, kinematic_operator, surface_from_facets
 from contact.law import ContactLaw, ContactState, Response, advance, evaluate, wear_increment
 from contact.linear import tangent_blocks
 from contact.solver import ConvergenceError, Effects, IncrementStats, NewtonSettings
@@ -64,11 +64,6 @@ class FullModel:
         return self.area.size
 
 
-def _component_names(dim: int, rotations: bool) -> list[str]:
-    names = ["ux", "uy", "uz"][:dim]
-    return names + ((["rz"] if dim == 2 else ["rx", "ry", "rz"]) if rotations else [])
-
-
 def build(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, np.ndarray], *,
           loads: dict | None = None, motions: dict | None = None, search_distance: float = np.inf,
           initial_gap: np.ndarray | None = None) -> FullModel:
@@ -101,7 +96,7 @@ def build(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, 
             stiffness, kept = coupling.reduce_matrix(stiffness), coupling.kept
             reference = np.atleast_2d(coupling.reference_dofs)
             for k, name in enumerate(names):
-                for comp, dof in zip(_component_names(elastic.dim, points[k].rotations), reference[k]):
+                for comp, dof in zip(component_names(elastic.dim, points[k].rotations), reference[k]):
                     labels[f"{body.name}.{name}.{comp}"] = offset + int(dof)
         if body.name in surfaces and np.any(kept[elastic.node_dofs[surfaces[body.name].nodes]] < 0):
             raise InputError(f"body {body.name}: the contact surface shares nodes with a "
@@ -125,12 +120,7 @@ def build(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, 
     index = np.full(n_all, -1)
     index[free] = np.arange(free.size)
 
-    pairing = pair_surfaces(surfaces[slave[0]], surfaces[master[0]], search_distance=search_distance)
-    if initial_gap is not None:
-        gap = np.asarray(initial_gap, dtype=float)
-        if gap.shape != pairing.initial_overclosure.shape:
-            raise InputError(f"initial gap has {gap.size} values for {pairing.n_points} contact points")
-        pairing = Pairing(**{**pairing.__dict__, "initial_overclosure": -gap})
+    pairing = pair_with_gap(surfaces[slave[0]], surfaces[master[0]], search_distance, initial_gap)
 
     def surface_dofs(name):
         elastic = by_name[name].elastic

@@ -118,6 +118,15 @@ class Response:
     dshear_dh: np.ndarray
     dshear_ds: np.ndarray
 
+    def tangent(self) -> np.ndarray:
+        """The consistent tangent ∂[p, τ]/∂[h, Δs] per point, (n, dim, dim) in N/mm³."""
+        n, n_tangent = self.shear.shape
+        matrix = np.zeros((n, 1 + n_tangent, 1 + n_tangent))
+        matrix[:, 0, 0] = self.dpressure_dh
+        matrix[:, 1:, 0] = self.dshear_dh
+        matrix[:, 1:, 1:] = self.dshear_ds
+        return matrix
+
 
 def evaluate(overclosure: np.ndarray, slip_increment: np.ndarray, state: ContactState,
              law: ContactLaw) -> Response:
@@ -236,8 +245,10 @@ def advance(state: ContactState, response: Response, law: ContactLaw, *,
     return new_state, status
 
 
-def utilised_cof(response: Response) -> np.ndarray:
-    """|τ|/p where closed, 0 where open: how much of the available friction is in use."""
-    shear_norm = np.linalg.norm(response.shear, axis=1)
-    return np.divide(shear_norm, response.pressure, out=np.zeros_like(shear_norm),
-                     where=response.pressure > 0.0)
+def utilised_cof(pressure: np.ndarray, shear: np.ndarray) -> np.ndarray:
+    """|τ|/p where closed, 0 where open: how much of the available friction is in use.
+
+    pressure (n,) and shear (n, n_tangent) in MPa (or both as nodal forces: the ratio is the same).
+    """
+    shear_norm = np.linalg.norm(shear, axis=1)
+    return np.divide(shear_norm, pressure, out=np.zeros_like(shear_norm), where=pressure > 0.0)

@@ -35,13 +35,7 @@ from contact.structure import ContactSpace
 
 def tangent_blocks(response: Response, area: np.ndarray) -> np.ndarray:
     """A·∂[p, τ]/∂[h, Δs] per point, (n, dim, dim) in N/mm (forces per mm of kinematics)."""
-    n, n_tangent = response.shear.shape
-    dim = n_tangent + 1
-    blocks = np.zeros((n, dim, dim))
-    blocks[:, 0, 0] = response.dpressure_dh
-    blocks[:, 1:, 0] = response.dshear_dh
-    blocks[:, 1:, 1:] = response.dshear_ds
-    return blocks * area[:, None, None]
+    return response.tangent() * area[:, None, None]
 
 
 @dataclass(frozen=True)

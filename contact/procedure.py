@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from contact.law import ContactState, Status
+from contact.law import ContactState, Status, utilised_cof
 from contact.solver import ContactSolver, Effects, Equilibrium
 
 PHASES = ("preload", "cof", "wear")
@@ -357,10 +357,8 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
 def _utilisation(equilibrium: Equilibrium, solver: ContactSolver) -> tuple[np.ndarray, np.ndarray]:
     """Utilised COF |τ|/p and shear traction |τ| (MPa) of every point."""
     per_point = equilibrium.forces.reshape(solver.n_points, -1)
-    normal = per_point[:, 0]
-    shear = np.linalg.norm(per_point[:, 1:], axis=1)
-    return (np.divide(shear, normal, out=np.zeros_like(shear), where=normal > 0.0),
-            shear / solver.area)
+    return (utilised_cof(per_point[:, 0], per_point[:, 1:]),
+            np.linalg.norm(per_point[:, 1:], axis=1) / solver.area)
 
 
 __all__ = ["LoadProgram", "Procedure", "run", "Observer", "CycleSummary", "IncrementRecord",

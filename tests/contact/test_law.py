@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from contact.checks import finite_difference_tangent, tangent_matrix
+from contact.checks import finite_difference_tangent
 from contact.law import ContactLaw, ContactState, Status, advance, evaluate, wear_increment
 
 LAW = ContactLaw(normal_stiffness=4e6, critical_slip=1e-3, cof_max=0.7, cof_rate=0.05,
@@ -43,7 +43,7 @@ def test_consistent_tangent_matches_finite_differences(n_tangent, case):
     expected = Status.STICK if case == "stick" else Status.SLIP
     assert np.all(response.status == expected)
     fd = finite_difference_tangent(h, ds, state, LAW)
-    analytic = tangent_matrix(response)
+    analytic = response.tangent()
     scale = np.abs(analytic).max(axis=(1, 2), keepdims=True)
     assert np.max(np.abs(fd - analytic) / scale) < 1e-6
 
