@@ -208,7 +208,8 @@ class ContactSpace:
         for k, name in enumerate(s.patterns):
             if name in s.loads:
                 applied += amplitudes[k] * s.loads[name]
-        internal = s.stiffness @ displacement + s.contact_operator.T @ forces
-        internal[self.control_dofs] += self.control_stiffness @ displacement[self.control_dofs]
-        applied[self.prescribed] = internal[self.prescribed]
+        # Only the prescribed rows of the internal forces are needed; locked bolts act on
+        # control DOFs, which are never prescribed.
+        p = self.prescribed
+        applied[p] = s.stiffness[p] @ displacement + s.contact_operator[:, p].T @ forces
         return applied
