@@ -1,10 +1,10 @@
 """Command-line parts of the multibody model.
 
-`fretwork sweep SCENE.toml --speeds 500:800:10 [--json]`: engine-speed sweep
-(add_sweep_parser / run_sweep). `fretwork mbs SCENE.toml [--out DIR] [--json]`: one run at the
-scene's speed with HDF5 histories, spectra, Campbell diagram and plots (add_run_parser /
-run_single). The lead's CLI registers them and calls args.handler(args). Summaries go to stdout
-(JSON with --json), progress bars to stderr.
+`fretwork sweep SCENE.toml --speeds 500:800:10 [--json] [--scheduler tcp://HOST:PORT] [--workers N]`:
+engine-speed sweep, the speeds as parallel dask cases (add_sweep_parser / run_sweep).
+`fretwork mbs SCENE.toml [--out DIR] [--json]`: one run at the scene's speed with HDF5 histories,
+spectra, Campbell diagram and plots (add_run_parser / run_single). The lead's CLI registers them
+and calls args.handler(args). Summaries go to stdout (JSON with --json), progress bars to stderr.
 """
 
 from __future__ import annotations
@@ -14,13 +14,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from mbs.plots import plot_campbell, plot_sweep
 from mbs.run import run_model
 from mbs.model import SimulationError
 from mbs.scene import load_model_params
 from mbs.sweep import parse_speeds, speed_sweep
+from pipelines.distributed import add_cluster_arguments
 from reduction.errors import InputError
 
 
@@ -35,6 +35,7 @@ def add_sweep_parser(subparsers):
     parser.add_argument("--out", default="results/sweep.h5", help="HDF5 file for the sweep (default: %(default)s)")
     parser.add_argument("--plots", default=None, help="folder for sweep and Campbell PNG plots (default: beside --out)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
+    add_cluster_arguments(parser)
     parser.set_defaults(handler=run_sweep)
     return parser
 
@@ -58,15 +59,11 @@ def run_sweep(args) -> int:
     try:
         params = load_model_params(args.scene)
         speeds = parse_speeds(args.speeds)
+        result = speed_sweep(params, speeds, path=args.out, progress=True, scheduler=args.scheduler,
+                             workers=args.workers)
     except InputError as error:
         print(f"fretwork sweep: {error}", file=sys.stderr)
         return 2
-    with tqdm(total=len(speeds), unit="speed", file=sys.stderr, desc="sweep") as bar:
-        def progress(speed, message):
-            bar.set_postfix_str(f"{speed:.0f} rpm" + (" FAILED" if message else ""))
-            bar.update(1)
-
-        result = speed_sweep(params, speeds, path=args.out, progress=progress)
     plots = Path(args.plots) if args.plots else Path(args.out).parent
     crossing_speeds = [c["speed_rpm"] for c in result.crossings]
     plot_sweep(result.speeds_rpm, result.wing_amplitude, plots / "sweep_wing_amplitude.png", crossings_rpm=crossing_speeds)

@@ -1,10 +1,14 @@
 """Engine-speed sweep: wing amplitude and dominant frequencies per speed, resonance crossings.
 
-Each speed is one fixed-step run of the model (the CW reduction is done once). The first half of
+Each speed is one fixed-step run of the model plus the coupled eigenfrequencies at that speed,
+run as an independent case on dask (pipelines.distributed: an embedded local cluster by default,
+an existing one with `scheduler`, in this process with workers=0). The CW (and flexible-throw)
+reduction is done once on the client and sent to every worker once: re-reducing on each worker
+cost more (see tests/bench/test_bench_distributed.py). The first half of
 every run is the start-up transient and is discarded; amplitudes and spectra use the second half,
 so choose SolverParams.revolutions long enough for the transient to decay (a few times
-1 / (damping ratio x 2 pi f) of the torsion mode). A speed whose time integration fails is
-recorded in `failures` and the sweep goes on. Units: rpm, Hz, mm.
+1 / (damping ratio x 2 pi f) of the torsion mode). A speed whose time integration fails (or whose
+case fails otherwise) is recorded in `failures` and the sweep goes on. Units: rpm, Hz, mm.
 """
 
 from __future__ import annotations
@@ -12,8 +16,6 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Callable
-
 import h5py
 import numpy as np
 
@@ -25,6 +27,7 @@ from mbs.model import SimulationError, simulate, system_eigenfrequencies
 from mbs.parameters import ModelParams
 from mbs.results import FORMAT, FORMAT_VERSION, write_campbell
 from mbs.spectra import amplitude_spectrum, dominant_frequencies
+from pipelines.distributed import map_cases
 from reduction.errors import InputError
 
 #: Number of dominant frequencies recorded per speed and number of system modes kept.
@@ -97,12 +100,40 @@ def _evaluate(run, shaft_speed: float):
     return amplitude, frequencies, frequencies / (shaft_speed / (2.0 * np.pi))
 
 
-def speed_sweep(model_params: ModelParams, speeds, *, path=None,
-                progress: Callable[[float, str | None], None] | None = None) -> SweepResult:
+@dataclass(frozen=True)
+class SpeedCase:
+    """What one speed gave: wing amplitude (number of CWs,) mm, dominant frequencies and orders
+    (N_DOMINANT,) Hz and orders, real-time factor, system eigenfrequencies (<= N_SYSTEM_MODES,) Hz;
+    failure: the integration's message when it failed (then only the eigenfrequencies are set)."""
+
+    system_frequencies: np.ndarray
+    wing_amplitude: np.ndarray | None = None
+    dominant_frequencies: np.ndarray | None = None
+    dominant_orders: np.ndarray | None = None
+    real_time_factor: float = np.nan
+    failure: str | None = None
+
+
+def run_speed(params: ModelParams, reduced, reduced_throw) -> SpeedCase:
+    """One sweep case: the coupled eigenfrequencies and the run at params.speed_rpm (a dask task)."""
+    eigen = system_eigenfrequencies(params, reduced, max_frequency=np.inf,
+                                    reduced_throw=reduced_throw)[:N_SYSTEM_MODES]
+    try:
+        run = simulate(params, reduced=reduced, reduced_throw=reduced_throw)
+    except SimulationError as error:
+        return SpeedCase(eigen, failure=str(error))
+    amplitude, frequencies, orders = _evaluate(run, params.shaft_speed)
+    return SpeedCase(eigen, amplitude, frequencies, orders, run.real_time_factor)
+
+
+def speed_sweep(model_params: ModelParams, speeds, *, path=None, progress: bool = False,
+                scheduler: str | None = None, workers: int | None = None) -> SweepResult:
     """Run model_params at every engine speed in `speeds` (rpm) and collect the sweep.
 
-    path: optional HDF5 file for the whole sweep (group /sweep, Campbell in /campbell).
-    progress: called after each speed with (speed_rpm, failure message or None).
+    path: optional HDF5 file for the whole sweep (group /sweep, Campbell in /campbell), written
+    here, by the client. progress: a bar over the finished speeds on stderr.
+    scheduler, workers: where the speeds run (pipelines.distributed.map_cases): None, None is an
+    embedded local cluster with one worker per core; workers=0 runs them in this process.
     """
     speeds = np.asarray(speeds, dtype=float)
     if speeds.ndim != 1 or speeds.size == 0 or np.any(speeds <= 0):
@@ -117,21 +148,20 @@ def speed_sweep(model_params: ModelParams, speeds, *, path=None,
     real_time = np.full(n, np.nan)
     system = np.full((n, N_SYSTEM_MODES), np.nan)
     failures = {}
-    for i, speed in enumerate(speeds):
-        params = replace(model_params, speed_rpm=float(speed))
-        eigen = system_eigenfrequencies(params, reduced, max_frequency=np.inf,
-                                        reduced_throw=reduced_throw)[:N_SYSTEM_MODES]
-        system[i, : eigen.size] = eigen
-        message = None
-        try:
-            run = simulate(params, reduced=reduced, reduced_throw=reduced_throw)
-            amplitude[i], frequencies[i], orders[i] = _evaluate(run, params.shaft_speed)
-            real_time[i] = run.real_time_factor
-        except SimulationError as error:
-            message = str(error)
-            failures[float(speed)] = message
-        if progress is not None:
-            progress(float(speed), message)
+    cases = [(float(speed), {"params": replace(model_params, speed_rpm=float(speed))}) for speed in speeds]
+    outcomes = map_cases(run_speed, cases, scheduler=scheduler, workers=workers, label="sweep", progress=progress,
+                         shared={"reduced": reduced, "reduced_throw": reduced_throw})
+    for i, outcome in enumerate(outcomes):
+        case = outcome.value
+        if case is None:
+            failures[outcome.key] = outcome.error
+            continue
+        system[i, : case.system_frequencies.size] = case.system_frequencies
+        if case.failure is not None:
+            failures[outcome.key] = case.failure
+            continue
+        amplitude[i], frequencies[i], orders[i] = case.wing_amplitude, case.dominant_frequencies, case.dominant_orders
+        real_time[i] = case.real_time_factor
     active_orders = excitation_orders(model_params.excitation, model_params.effects)
     campbell = campbell_diagram(reduced, speeds, active_orders, system_frequencies=system)
     crossings = campbell.system_crossings if n > 1 else []

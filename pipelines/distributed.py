@@ -1,0 +1,188 @@
+"""Independent cases (sweep speeds, study settings, limit amplitudes) as dask.distributed tasks.
+
+``map_cases(function, cases)`` calls ``function(**kwargs)`` once per case and returns one
+:class:`CaseOutcome` per case, in the order of ``cases``:
+
+- default: an embedded ``LocalCluster`` sized to the machine (one single-threaded worker process
+  per core, BLAS pinned to one thread in the workers so two workers do not fight over a core),
+  started for the call and closed afterwards; nothing to configure;
+- ``scheduler="tcp://HOST:PORT"``: the same work on an existing dask cluster (its workers need
+  fretwork installed); an address that does not answer within ``CONNECT_TIMEOUT_S`` is an
+  InputError naming it;
+- ``workers=0``: in this process, one case after the other, without dask (debugging; a single
+  case on the embedded cluster also runs here, a cluster start-up would cost more than it).
+
+A case that raises is reported in its outcome (``"ExceptionType: message"``) and the others
+complete; it is not re-run, the error would repeat. A case whose worker process dies (crash,
+out of memory, killed) is re-run on another worker up to ``retries`` times (dask's
+``allowed-failures``; on an existing cluster its own setting applies). Results travel back to
+the client only: the caller writes the result files, workers never do.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import sys
+import uuid
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Callable, Iterator, Sequence
+
+from tqdm import tqdm
+
+from reduction.errors import InputError
+
+#: Seconds to wait for an existing scheduler to answer before giving up.
+CONNECT_TIMEOUT_S = 10.0
+#: One BLAS/OpenMP thread per worker: the workers already fill the cores.
+SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+_ADDRESS = re.compile(r"^(tcp|tls|ucx)://[^\s:/]+:\d+$")
+
+
+@dataclass(frozen=True)
+class CaseOutcome:
+    """What one case gave back.
+
+    key: what identifies the case (a speed in rpm, an amplitude in mm, a label);
+    value: the function's return value (None if the case failed);
+    error: ``"ExceptionType: message"`` if the case failed, else None;
+    attempts: how many times the case was started (1 unless a worker died under it; None when
+    the scheduler could not tell).
+    """
+
+    key: object
+    value: object | None
+    error: str | None
+    attempts: int | None
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+def add_cluster_arguments(parser) -> None:
+    """Add ``--scheduler tcp://HOST:PORT`` and ``--workers N`` to an argparse parser."""
+    group = parser.add_argument_group("parallel cases (dask.distributed)")
+    group.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                       help="run the cases on an existing dask cluster (default: an embedded local cluster)")
+    group.add_argument("--workers", type=int, default=None, metavar="N",
+                       help="worker processes of the embedded cluster (default: one per core; 0: run the "
+                            "cases one after the other in this process)")
+
+
+def map_cases(function: Callable, cases: Sequence[tuple[object, dict]], *, scheduler: str | None = None,
+              workers: int | None = None, label: str = "cases", progress: bool = True, retries: int = 2,
+              shared: dict | None = None) -> list[CaseOutcome]:
+    """Run ``function(**kwargs, **shared)`` for every ``(key, kwargs)`` of ``cases``; outcomes in case order.
+
+    function: a module-level (picklable) function. scheduler: address of an existing dask
+    scheduler, or None for the embedded local cluster. workers: processes of the embedded
+    cluster (None: one per core, never more than cases; 0: serially in this process).
+    label: name of the tqdm bar (stderr) over completed cases, shown when ``progress``.
+    retries: re-runs of a case whose worker died. shared: keyword arguments common to every
+    case (a reduced model, ...), sent to each worker once instead of with every case.
+    """
+    cases = [(key, dict(kwargs)) for key, kwargs in cases]
+    shared = dict(shared or {})
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
+        raise InputError(f"--workers {workers!r}: give a whole number of worker processes, 0 or more")
+    if not isinstance(retries, int) or retries < 0:
+        raise InputError(f"retries {retries!r}: give a whole number, 0 or more")
+    if scheduler is not None and workers is not None:
+        raise InputError(f"--workers {workers} sizes the embedded cluster; with --scheduler {scheduler} "
+                         "the cases run on that cluster's workers (give one of the two)")
+    if scheduler is not None and not _ADDRESS.match(scheduler):
+        raise InputError(f"--scheduler {scheduler!r}: give the dask scheduler's address as tcp://HOST:PORT")
+    if not cases:
+        return []
+    if workers == 0 or (scheduler is None and len(cases) == 1):
+        return _serial(function, cases, shared, label, progress)
+    with _client(scheduler, workers, len(cases), retries) as client:
+        return _distributed(client, function, cases, shared, label, progress)
+
+
+def _call(function: Callable, kwargs: dict, **shared) -> tuple[bool, object]:
+    """Run one case; an exception comes back as text so that dask does not retry it."""
+    try:
+        return True, function(**kwargs, **shared)
+    except Exception as error:  # the case fails, the sweep goes on: report it, whatever it is
+        return False, _describe(error)
+
+
+def _describe(error: BaseException) -> str:
+    return f"{type(error).__name__}: {error}"
+
+
+def _serial(function, cases, shared, label, progress) -> list[CaseOutcome]:
+    outcomes = []
+    for key, kwargs in tqdm(cases, desc=label, unit="case", file=sys.stderr, disable=not progress):
+        ok, value = _call(function, kwargs, **shared)
+        outcomes.append(CaseOutcome(key, value if ok else None, None if ok else value, 1))
+    return outcomes
+
+
+@contextmanager
+def _client(scheduler: str | None, workers: int | None, n_cases: int, retries: int) -> Iterator:
+    import dask
+    from distributed import Client, LocalCluster
+    from dask.system import cpu_count
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
+        except (OSError, TimeoutError) as error:
+            raise InputError(f"--scheduler {scheduler}: no dask scheduler answered within "
+                             f"{CONNECT_TIMEOUT_S:g} s ({error}); start one with `dask scheduler` and "
+                             "workers with `dask worker ADDRESS`, or leave --scheduler out to use "
+                             "this machine") from None
+        with client:
+            yield client
+        return
+    n_workers = min(workers or cpu_count(), n_cases)
+    # memory_limit=0: a worker that grows past its share of the RAM would be killed and its
+    # case re-run until it counts as failed; one large contact case may use most of the machine.
+    with dask.config.set({"distributed.scheduler.allowed-failures": retries}), \
+            LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                         silence_logs=logging.ERROR, memory_limit=0, env=dict(SINGLE_THREAD_ENV)) as cluster, \
+            Client(cluster, set_as_default=False) as client:
+        yield client
+
+
+def _distributed(client, function, cases, shared, label, progress) -> list[CaseOutcome]:
+    from distributed import as_completed
+
+    shared_futures = {name: client.scatter(value, broadcast=True) for name, value in shared.items()}
+    run = uuid.uuid4().hex[:8]
+    futures = [client.submit(_call, function, kwargs, **shared_futures, key=f"{label}-{run}-{i}", pure=False)
+               for i, (_, kwargs) in enumerate(cases)]
+    position = {future.key: i for i, future in enumerate(futures)}
+    results: list = [None] * len(cases)
+    with tqdm(total=len(cases), desc=label, unit="case", file=sys.stderr, disable=not progress) as bar:
+        for future in as_completed(futures, loop=client.loop):
+            if future.status == "finished":
+                results[position[future.key]] = future.result()
+            else:  # the worker died more often than allowed, or the cluster went away
+                try:
+                    error = future.exception()
+                except BaseException as cancelled:  # a cancelled future has no exception to give
+                    error = cancelled
+                results[position[future.key]] = (False, _describe(error))
+            bar.update(1)
+    attempts = _attempts(client, [future.key for future in futures])
+    return [CaseOutcome(key, value if ok else None, None if ok else value, attempts.get(future.key))
+            for (key, _), (ok, value), future in zip(cases, results, futures)]
+
+
+def _attempts(client, keys: list) -> dict:
+    """Starts per task: 1 + the times a worker died while it held the task (scheduler's count)."""
+    def count(dask_scheduler):
+        return {key: 1 + dask_scheduler.tasks[key].suspicious for key in keys if key in dask_scheduler.tasks}
+
+    try:
+        return client.run_on_scheduler(count)
+    except Exception:  # a scheduler that cannot run the query: attempts unknown, results unaffected
+        return {}
+
+
+__all__ = ["CaseOutcome", "map_cases", "add_cluster_arguments", "CONNECT_TIMEOUT_S"]

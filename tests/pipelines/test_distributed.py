@@ -1,0 +1,108 @@
+"""Independent cases on dask.distributed: same results as in-process, a worker killed mid-sweep
+costs a re-run and nothing else, a failing case is reported while the rest complete, an
+unreachable scheduler is bad input."""
+
+import argparse
+import os
+import time
+
+import numpy as np
+import pytest
+
+import pipelines.distributed as distributed
+from mbs.cli import add_sweep_parser
+from mbs.parameters import ModelParams, SolverParams
+from mbs.sweep import speed_sweep
+from pipelines.distributed import CaseOutcome, add_cluster_arguments, map_cases
+from reduction.errors import InputError
+
+
+def cubic(x, offset=0.0):
+    """A case that takes long enough (0.2 s) for both workers to hold cases at once."""
+    time.sleep(0.2)
+    return x ** 3 + offset
+
+
+def cubic_killing_its_worker_once(x, victim, marker):
+    """The first time case `victim` runs, its worker process dies abruptly (no cleanup)."""
+    if x == victim and not os.path.exists(marker):
+        with open(marker, "w"):
+            pass
+        os._exit(1)
+    return cubic(x)
+
+
+def cubic_refusing_two(x):
+    if x == 2:
+        raise ValueError("x = 2 is out of range")
+    return cubic(x)
+
+
+def test_two_workers_give_the_serial_results_in_case_order():
+    cases = [(f"case {x}", {"x": x}) for x in (3, 1, 4, 1, 5)]
+    parallel = map_cases(cubic, cases, workers=2, progress=False, shared={"offset": 0.5})
+    serial = map_cases(cubic, cases, workers=0, progress=False, shared={"offset": 0.5})
+    assert parallel == serial
+    assert [o.key for o in parallel] == [key for key, _ in cases]
+    assert [o.value for o in parallel] == [27.5, 1.5, 64.5, 1.5, 125.5]
+
+
+def test_a_worker_killed_mid_sweep_has_its_case_rerun_and_every_case_is_there_once(tmp_path):
+    marker = tmp_path / "killed"
+    cases = [(x, {"x": x, "victim": 4, "marker": str(marker)}) for x in range(8)]
+    outcomes = map_cases(cubic_killing_its_worker_once, cases, workers=2, progress=False)
+    assert marker.exists()  # a worker did die
+    assert [o.key for o in outcomes] == list(range(8))
+    assert all(o.error is None for o in outcomes)
+    assert [o.value for o in outcomes] == [x ** 3 for x in range(8)]
+    assert outcomes[4].attempts == 2  # the scheduler saw the death and re-ran the case
+
+
+def test_a_failing_case_is_reported_and_the_others_complete():
+    outcomes = map_cases(cubic_refusing_two, [(x, {"x": x}) for x in range(4)], workers=2, progress=False)
+    assert outcomes[2] == CaseOutcome(2, None, "ValueError: x = 2 is out of range", 1)
+    assert [o.value for o in outcomes if o.key != 2] == [0, 1, 27]
+    serial = map_cases(cubic_refusing_two, [(2, {"x": 2})], workers=0, progress=False)
+    assert serial[0].error == "ValueError: x = 2 is out of range"
+
+
+def test_bad_cluster_settings_are_named():
+    with pytest.raises(InputError, match="--workers -1"):
+        map_cases(cubic, [(1, {"x": 1})], workers=-1)
+    with pytest.raises(InputError, match="tcp://HOST:PORT"):
+        map_cases(cubic, [(1, {"x": 1})], scheduler="localhost")
+    with pytest.raises(InputError, match="give one of the two"):
+        map_cases(cubic, [(1, {"x": 1})], scheduler="tcp://127.0.0.1:1", workers=2)
+    parser = argparse.ArgumentParser()
+    add_cluster_arguments(parser)
+    args = parser.parse_args(["--scheduler", "tcp://10.0.0.5:8786", "--workers", "3"])
+    assert (args.scheduler, args.workers) == ("tcp://10.0.0.5:8786", 3)
+
+
+TINY_SCENE = '[mbs]\nn_modes = 2\neffects = ["gear_mesh"]\n[mbs.solver]\nrevolutions = 0.5\ntime_step = 1e-4\n'
+
+
+def test_cli_sweep_with_an_unreachable_scheduler_exits_2_naming_it(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(distributed, "CONNECT_TIMEOUT_S", 1.0)
+    scene = tmp_path / "scene.toml"
+    scene.write_text(TINY_SCENE)
+    parser = argparse.ArgumentParser()
+    add_sweep_parser(parser.add_subparsers())
+    out = tmp_path / "sweep.h5"
+    args = parser.parse_args(["sweep", str(scene), "--speeds", "700,750", "--out", str(out),
+                              "--scheduler", "tcp://127.0.0.1:1"])
+    assert args.handler(args) == 2
+    error = capsys.readouterr().err
+    assert "--scheduler tcp://127.0.0.1:1: no dask scheduler answered" in error
+    assert "Traceback" not in error and not out.exists()
+
+
+def test_mbs_sweep_on_two_workers_equals_the_serial_sweep():
+    params = ModelParams(n_modes=2, effects=frozenset({"gear_mesh"}),
+                         solver=SolverParams(revolutions=0.5, time_step=1e-4))
+    parallel = speed_sweep(params, [700.0, 750.0], workers=2)
+    serial = speed_sweep(params, [700.0, 750.0], workers=0)
+    assert not parallel.failures and not serial.failures
+    for name in ("wing_amplitude", "dominant_frequencies", "dominant_orders", "system_frequencies"):
+        np.testing.assert_array_equal(getattr(parallel, name), getattr(serial, name), err_msg=name)
+    assert np.all(parallel.wing_amplitude > 0)
