@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
+from mbs.model import SimulationError
 from mbs.plots import plot_campbell, plot_sweep
 from mbs.run import run_model
-from mbs.model import SimulationError
 from mbs.scene import load_model_params
 from mbs.sweep import parse_speeds, speed_sweep
 from pipelines.distributed import add_cluster_arguments

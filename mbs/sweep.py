@@ -16,13 +16,14 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, replace
 from pathlib import Path
+
 import h5py
 import numpy as np
 
 from mbs.campbell import Campbell, campbell_diagram
 from mbs.counterweight import reduce_counterweight
-from mbs.flexible_throw import reduce_throw
 from mbs.excitation import excitation_orders
+from mbs.flexible_throw import reduce_throw
 from mbs.model import SimulationError, simulate, system_eigenfrequencies
 from mbs.parameters import ModelParams
 from mbs.results import FORMAT, FORMAT_VERSION, write_campbell

@@ -34,6 +34,11 @@ between two identical runs, the CPU time far less. Runs use one BLAS thread (thr
 installed): the contact-space systems are small and dense, and two OpenBLAS threads on a loaded
 2-core machine spin against each other (a 2.6 s run took 27 s of CPU), which made the costs
 depend on the neighbours instead of the settings.
+
+The reference and the one-knob runs do not depend on each other: they run as one round of
+parallel cases (pipelines.distributed: an embedded local cluster, or ``scheduler``; workers=0
+runs them in this process). The combinations follow one at a time, each depending on the last.
+Every run is the same computation wherever it runs, so the records do not depend on where.
 """
 
 from __future__ import annotations
@@ -61,6 +66,7 @@ from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from pipelines import scene as scenes
 from pipelines.build import build, make_mesh
+from pipelines.distributed import add_cluster_arguments, map_cases
 from reduction.errors import InputError
 
 TOLERANCE = 0.02
@@ -347,16 +353,20 @@ def _check_contact_sizes(scene_path: Path, scene: scenes.Scene, base: dict, knob
 
 
 def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: dict | None = None,
-                   sweeps: dict | None = None, on_run: Callable[[dict], None] | None = None) -> Study:
+                   sweeps: dict | None = None, on_run: Callable[[dict], None] | None = None,
+                   scheduler: str | None = None, workers: int | None = None) -> Study:
     """Sweep every applicable knob of the scene one at a time against the finest setting.
 
     overrides: scene overrides applied to every run ("procedure.cof_cycles": 10, ...), after the
     study's cycle caps (wear ≤ 20, COF ≤ 40 cycles; quick: ≤ 4 and ≤ 10, two values per knob).
     sweeps: knob name → values replacing its default sweep. on_run: called with each record.
+    scheduler, workers: where the independent runs go (pipelines.distributed.map_cases).
     """
     scene_path = Path(scene_path)
+    cluster = {"scheduler": scheduler, "workers": workers}
     if _is_multibody(scene_path):
-        return multibody_study(scene_path, quick=quick, overrides=overrides, sweeps=sweeps, on_run=on_run)
+        return multibody_study(scene_path, quick=quick, overrides=overrides, sweeps=sweeps, on_run=on_run,
+                               **cluster)
     scene = scenes.load(scene_path)
     base = {**base_overrides(scene, quick), **(overrides or {})}
     scene = scenes.load(scene_path, base)
@@ -366,10 +376,12 @@ def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: di
         if knob.name == "contact_size":
             _check_contact_sizes(scene_path, scene, base, knob)
 
-    def execute(settings, varied, label):
-        return run_setting(scene_path, {**base, **setting_overrides(scene, settings)}, label, settings, varied)
+    def arguments(settings, varied, label):
+        return {"scene_path": scene_path, "overrides": {**base, **setting_overrides(scene, settings)},
+                "label": label, "settings": settings, "varied": varied}
 
-    reference, records, recommendation = _sweep(knobs, execute, lambda s: setting_overrides(scene, s), on_run)
+    reference, records, recommendation = _sweep(knobs, run_setting, arguments, lambda s: setting_overrides(scene, s),
+                                                on_run, cluster)
     return Study(scene.name, str(scene_path), base, knobs, not_applicable, reference, records, recommendation)
 
 
@@ -385,25 +397,53 @@ def _apply_sweeps(knobs: list[Knob], sweeps: dict | None, scene_name: str) -> li
     return [by_name[k.name] for k in knobs]
 
 
-def _sweep(knobs: list[Knob], execute: Callable, overrides_of: Callable, on_run) -> tuple[Run, list, dict | None]:
-    """Reference, one-knob runs, combinations; the records and the recommendation."""
+def _raising_input_errors(runner: Callable, **kwargs):
+    """Call the runner (a dask task); bad input comes back as the InputError itself, to be raised
+    by the client as before, not as a failed run."""
+    try:
+        return runner(**kwargs)
+    except InputError as error:
+        return error
+
+
+def _sweep(knobs: list[Knob], runner: Callable, arguments: Callable, overrides_of: Callable, on_run,
+           cluster: dict) -> tuple[Run, list, dict | None]:
+    """Reference, one-knob runs, combinations; the records and the recommendation.
+
+    runner(**arguments(settings, varied, label)) makes one Run; cluster: map_cases' scheduler
+    and workers.
+    """
     reference_settings = {k.name: k.values[0] for k in knobs}
 
-    def run(settings, varied):
-        return execute(settings, varied, _label(knobs, settings, reference_settings))
+    def runs(settings_list):
+        cases = []
+        for settings, varied in settings_list:
+            label = _label(knobs, settings, reference_settings)
+            cases.append((label, {"runner": runner, **arguments(settings, varied, label)}))
+        outcomes = map_cases(_raising_input_errors, cases, label="accuracy runs", progress=on_run is not None,
+                             **cluster)
+        for outcome in outcomes:
+            if isinstance(outcome.value, InputError):
+                raise outcome.value
+            if outcome.error:
+                raise RuntimeError(f"accuracy run {outcome.key}: {outcome.error}")
+        return [outcome.value for outcome in outcomes]
 
-    reference = run(reference_settings, ())
+    def run(settings, varied):
+        return runs([(settings, varied)])[0]
+
+    one_knob = [({**reference_settings, knob.name: value}, (knob.name,)) for knob in knobs for value in knob.values[1:]]
+    reference, *singles = runs([(reference_settings, ()), *one_knob])
     if reference.failure:
         raise InputError(f"the reference run (finest setting of every knob) did not converge: "
                          f"{reference.failure}")
     records = [_record(reference, reference)]
     if on_run:
         on_run(records[-1])
-    for knob in knobs:
-        for value in knob.values[1:]:
-            records.append(_record(run({**reference_settings, knob.name: value}, (knob.name,)), reference))
-            if on_run:
-                on_run(records[-1])
+    for single in singles:
+        records.append(_record(single, reference))
+        if on_run:
+            on_run(records[-1])
     combined = _combined(knobs, records, reference_settings)
     for _ in range(MAX_COMBINED_RUNS):
         varied = tuple(k.name for k in knobs if combined[k.name] != reference_settings[k.name])
@@ -559,7 +599,8 @@ def cmd_accuracy(args) -> int:
         print(f"  {record['label']}: CPU {record['cpu_time_s']:.1f} s, wall {record['wall_time_s']:.1f} s, {state}",
               file=sys.stderr, flush=True)
 
-    study = accuracy_study(args.scene, quick=args.quick, overrides=overrides, sweeps=sweeps, on_run=progress)
+    study = accuracy_study(args.scene, quick=args.quick, overrides=overrides, sweeps=sweeps, on_run=progress,
+                           scheduler=args.scheduler, workers=args.workers)
     out = Path(args.out)
     study.plot = str(plot_pareto(study.to_dict(), out / f"accuracy_{study.scene}.png"))
     text = json.dumps(study.to_dict(), indent=2, default=float)
@@ -579,6 +620,7 @@ def add_accuracy_parser(kinds) -> None:
                         help="scene override for every run, e.g. procedure.cof_cycles=10 (repeat)")
     parser.add_argument("--knob", action="append", default=[], metavar="NAME=V1,V2",
                         help="replace a knob's sweep, e.g. contact_size=3,4,6 (repeat)")
+    add_cluster_arguments(parser)
     parser.set_defaults(func=cmd_accuracy)
 
 
@@ -633,7 +675,8 @@ def run_multibody_setting(scene_path: Path, overrides: dict, label: str, setting
 
 
 def multibody_study(scene_path: Path, *, quick: bool = False, overrides: dict | None = None,
-                    sweeps: dict | None = None, on_run: Callable[[dict], None] | None = None) -> Study:
+                    sweeps: dict | None = None, on_run: Callable[[dict], None] | None = None,
+                    scheduler: str | None = None, workers: int | None = None) -> Study:
     """The accuracy study of a multibody scene ([mbs] table): CB modes and time step."""
     from mbs.scene import model_params_from_mapping
 
@@ -645,8 +688,10 @@ def multibody_study(scene_path: Path, *, quick: bool = False, overrides: dict | 
     knobs = _apply_sweeps(multibody_knobs(params, quick), sweeps, name)
     not_applicable = {knob: "contact scenes only; this scene has no contact interface" for knob in CONTACT_KNOBS}
 
-    def execute(settings, varied, label):
-        return run_multibody_setting(scene_path, {**base, **_multibody_overrides(settings)}, label, settings, varied)
+    def arguments(settings, varied, label):
+        return {"scene_path": scene_path, "overrides": {**base, **_multibody_overrides(settings)}, "label": label,
+                "settings": settings, "varied": varied}
 
-    reference, records, recommendation = _sweep(knobs, execute, _multibody_overrides, on_run)
+    reference, records, recommendation = _sweep(knobs, run_multibody_setting, arguments, _multibody_overrides, on_run,
+                                                {"scheduler": scheduler, "workers": workers})
     return Study(name, str(scene_path), base, knobs, not_applicable, reference, records, recommendation)

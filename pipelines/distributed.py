@@ -25,9 +25,9 @@ import logging
 import re
 import sys
 import uuid
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Callable, Iterator, Sequence
 
 from tqdm import tqdm
 
@@ -125,8 +125,8 @@ def _serial(function, cases, shared, label, progress) -> list[CaseOutcome]:
 @contextmanager
 def _client(scheduler: str | None, workers: int | None, n_cases: int, retries: int) -> Iterator:
     import dask
-    from distributed import Client, LocalCluster
     from dask.system import cpu_count
+    from distributed import Client, LocalCluster
 
     if scheduler is not None:
         try:
@@ -142,9 +142,12 @@ def _client(scheduler: str | None, workers: int | None, n_cases: int, retries: i
     n_workers = min(workers or cpu_count(), n_cases)
     # memory_limit=0: a worker that grows past its share of the RAM would be killed and its
     # case re-run until it counts as failed; one large contact case may use most of the machine.
+    # The scheduler serves its health page even without a dashboard: on a free local port, not
+    # on 8787 (taken by any other cluster on the machine, with a warning).
     with dask.config.set({"distributed.scheduler.allowed-failures": retries}), \
             LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                         silence_logs=logging.ERROR, memory_limit=0, env=dict(SINGLE_THREAD_ENV)) as cluster, \
+                         scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.ERROR,
+                         memory_limit=0, env=dict(SINGLE_THREAD_ENV)) as cluster, \
             Client(cluster, set_as_default=False) as client:
         yield client
 

@@ -106,3 +106,17 @@ def test_mbs_sweep_on_two_workers_equals_the_serial_sweep():
     for name in ("wing_amplitude", "dominant_frequencies", "dominant_orders", "system_frequencies"):
         np.testing.assert_array_equal(getattr(parallel, name), getattr(serial, name), err_msg=name)
     assert np.all(parallel.wing_amplitude > 0)
+
+
+def test_accuracy_study_records_do_not_depend_on_where_the_runs_ran(coarse_cylinder):
+    from pipelines.accuracy import accuracy_study
+
+    sweeps = {"contact_size": [0.2], "increments_per_cycle": [12, 6], "normal_stiffness": [4.0e6, 4.0e5],
+              "critical_slip": [1.0e-3], "cycle_jump": [1000.0]}
+    parallel = accuracy_study(coarse_cylinder, quick=True, sweeps=sweeps, workers=2)
+    serial = accuracy_study(coarse_cylinder, quick=True, sweeps=sweeps, workers=0)
+    costs = ("wall_time_s", "cpu_time_s")
+    assert len(parallel.records) == len(serial.records) == 3
+    for ours, theirs in zip(parallel.records, serial.records):
+        assert {k: v for k, v in ours.items() if k not in costs} == {k: v for k, v in theirs.items() if k not in costs}
+    assert parallel.recommendation["label"] == serial.recommendation["label"]
