@@ -16,6 +16,23 @@ ENERGY_SAMPLES = 201
 
 
 @dataclass(frozen=True)
+class SolverStatistics:
+    """Counters of one fixed-step generalized-alpha run (exudyn's SolverIterationData).
+
+    newton_iterations: all Newton iterations of the run, the Jacobian-reusing (modified) ones
+    included; jacobian_evaluations: Jacobians computed and factorised.
+    """
+
+    time_steps: int
+    newton_iterations: int
+    jacobian_evaluations: int
+
+    @property
+    def newton_iterations_per_step(self) -> float:
+        return self.newton_iterations / max(self.time_steps, 1)
+
+
+@dataclass(frozen=True)
 class RunHistories:
     """Fixed-step histories of one run (rows = samples at ``time``).
 
@@ -31,6 +48,8 @@ class RunHistories:
     of the two wing tips relative to the interface. crank_angle (n,) rad, crank_speed (n,) rad/s.
     energy_time (n_e,) s and energy (n_e,) mJ: total mechanical energy at up to ENERGY_SAMPLES
     evenly spaced samples when requested, else None. wall_time: s spent in the solver.
+    solver: exudyn's iteration counters of the run (time steps, Newton iterations, Jacobian
+    evaluations); None for histories read back from a file.
     """
 
     time: np.ndarray
@@ -50,6 +69,7 @@ class RunHistories:
     energy_time: np.ndarray | None
     energy: np.ndarray | None
     wall_time: float
+    solver: SolverStatistics | None = None
 
     @property
     def wing_torsion(self) -> np.ndarray:
@@ -84,6 +104,13 @@ def counterweight_energy(reduced: ReducedCounterweight, rotation, velocity, omeg
 
 def _stored(mbs, sensor) -> np.ndarray:
     return np.asarray(mbs.GetSensorStoredData(sensor))
+
+
+def solver_statistics(mbs) -> SolverStatistics:
+    """Iteration counters of the last SolveDynamic of ``mbs`` (it stores its solver in mbs.sys)."""
+    counters = mbs.sys["dynamicSolver"].it
+    return SolverStatistics(time_steps=int(counters.numberOfSteps), newton_iterations=int(counters.newtonStepsCount),
+                            jacobian_evaluations=int(counters.newtonJacobiCount))
 
 
 def collect_histories(mbs, sensors, reduced: ReducedCounterweight, energy: bool, wall_time: float) -> RunHistories:
@@ -126,4 +153,5 @@ def collect_histories(mbs, sensors, reduced: ReducedCounterweight, energy: bool,
         energy_time=energy_time,
         energy=total_energy,
         wall_time=wall_time,
+        solver=solver_statistics(mbs),
     )
