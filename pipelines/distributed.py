@@ -12,11 +12,18 @@
 - ``workers=0``: in this process, one case after the other, without dask (debugging; a single
   case on the embedded cluster also runs here, a cluster start-up would cost more than it).
 
+Each call starts and closes its own local cluster (a few seconds); a caller that maps cases
+round after round (a bisection) keeps one up with ``with cluster(scheduler, workers) as where:``
+and passes ``**where`` to every ``map_cases`` call.
+
 A case that raises is reported in its outcome (``"ExceptionType: message"``) and the others
 complete; it is not re-run, the error would repeat. A case whose worker process dies (crash,
 out of memory, killed) is re-run on another worker up to ``retries`` times (dask's
 ``allowed-failures``; on an existing cluster its own setting applies). Results travel back to
 the client only: the caller writes the result files, workers never do.
+
+Workers are started with the spawn method: a script (not the ``fretwork`` command) that calls
+``map_cases`` must do so under ``if __name__ == "__main__":``.
 """
 
 from __future__ import annotations
@@ -85,15 +92,7 @@ def map_cases(function: Callable, cases: Sequence[tuple[object, dict]], *, sched
     """
     cases = [(key, dict(kwargs)) for key, kwargs in cases]
     shared = dict(shared or {})
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
-        raise InputError(f"--workers {workers!r}: give a whole number of worker processes, 0 or more")
-    if not isinstance(retries, int) or retries < 0:
-        raise InputError(f"retries {retries!r}: give a whole number, 0 or more")
-    if scheduler is not None and workers is not None:
-        raise InputError(f"--workers {workers} sizes the embedded cluster; with --scheduler {scheduler} "
-                         "the cases run on that cluster's workers (give one of the two)")
-    if scheduler is not None and not _ADDRESS.match(scheduler):
-        raise InputError(f"--scheduler {scheduler!r}: give the dask scheduler's address as tcp://HOST:PORT")
+    _check_cluster_arguments(scheduler, workers, retries)
     if not cases:
         return []
     if workers == 0 or (scheduler is None and len(cases) == 1):
@@ -123,10 +122,57 @@ def _serial(function, cases, shared, label, progress) -> list[CaseOutcome]:
 
 
 @contextmanager
-def _client(scheduler: str | None, workers: int | None, n_cases: int, retries: int) -> Iterator:
+def cluster(scheduler: str | None = None, workers: int | None = None, *, retries: int = 2) -> Iterator[dict]:
+    """One cluster for several ``map_cases`` calls: yields their ``scheduler`` and ``workers`` keywords.
+
+    With ``scheduler`` or ``workers=0`` nothing is started (the calls go there, or run in this
+    process); otherwise an embedded local cluster (``workers`` processes, default one per core)
+    is up until the block ends and every call sends its cases to it, a single case included.
+    """
+    _check_cluster_arguments(scheduler, workers, retries)
+    if scheduler is not None or workers == 0:
+        yield {"scheduler": scheduler, "workers": workers}
+        return
+    with _local_cluster(workers, retries) as local:
+        yield {"scheduler": local.scheduler_address, "workers": None}
+
+
+def _check_cluster_arguments(scheduler, workers, retries) -> None:
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
+        raise InputError(f"--workers {workers!r}: give a whole number of worker processes, 0 or more")
+    if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
+        raise InputError(f"retries {retries!r}: give a whole number, 0 or more")
+    if scheduler is not None and workers is not None:
+        raise InputError(f"--workers {workers} sizes the embedded cluster; with --scheduler {scheduler} "
+                         "the cases run on that cluster's workers (give one of the two)")
+    if scheduler is not None and not _ADDRESS.match(scheduler):
+        raise InputError(f"--scheduler {scheduler!r}: give the dask scheduler's address as tcp://HOST:PORT")
+
+
+@contextmanager
+def _local_cluster(workers: int | None, retries: int, n_cases: int | None = None) -> Iterator:
+    """LocalCluster of ``workers`` single-threaded processes (default one per core, at most n_cases)."""
     import dask
     from dask.system import cpu_count
-    from distributed import Client, LocalCluster
+    from distributed import LocalCluster
+
+    n_workers = workers or cpu_count()
+    if n_cases is not None:
+        n_workers = min(n_workers, n_cases)
+    # memory_limit=0: a worker that grows past its share of the RAM would be killed and its
+    # case re-run until it counts as failed; one large contact case may use most of the machine.
+    # The scheduler serves its health page even without a dashboard: on a free local port, not
+    # on 8787 (taken by any other cluster on the machine, with a warning).
+    with dask.config.set({"distributed.scheduler.allowed-failures": retries}), \
+            LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                         scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.ERROR,
+                         memory_limit=0, env=dict(SINGLE_THREAD_ENV)) as local:
+        yield local
+
+
+@contextmanager
+def _client(scheduler: str | None, workers: int | None, n_cases: int, retries: int) -> Iterator:
+    from distributed import Client
 
     if scheduler is not None:
         try:
@@ -139,16 +185,7 @@ def _client(scheduler: str | None, workers: int | None, n_cases: int, retries: i
         with client:
             yield client
         return
-    n_workers = min(workers or cpu_count(), n_cases)
-    # memory_limit=0: a worker that grows past its share of the RAM would be killed and its
-    # case re-run until it counts as failed; one large contact case may use most of the machine.
-    # The scheduler serves its health page even without a dashboard: on a free local port, not
-    # on 8787 (taken by any other cluster on the machine, with a warning).
-    with dask.config.set({"distributed.scheduler.allowed-failures": retries}), \
-            LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                         scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.ERROR,
-                         memory_limit=0, env=dict(SINGLE_THREAD_ENV)) as cluster, \
-            Client(cluster, set_as_default=False) as client:
+    with _local_cluster(workers, retries, n_cases) as local, Client(local, set_as_default=False) as client:
         yield client
 
 
@@ -188,4 +225,4 @@ def _attempts(client, keys: list) -> dict:
         return {}
 
 
-__all__ = ["CaseOutcome", "map_cases", "add_cluster_arguments", "CONNECT_TIMEOUT_S"]
+__all__ = ["CONNECT_TIMEOUT_S", "CaseOutcome", "add_cluster_arguments", "cluster", "map_cases"]

@@ -13,7 +13,7 @@ import pipelines.distributed as distributed
 from mbs.cli import add_sweep_parser
 from mbs.parameters import ModelParams, SolverParams
 from mbs.sweep import speed_sweep
-from pipelines.distributed import CaseOutcome, add_cluster_arguments, map_cases
+from pipelines.distributed import CaseOutcome, add_cluster_arguments, cluster, map_cases
 from reduction.errors import InputError
 
 
@@ -59,9 +59,13 @@ def test_a_worker_killed_mid_sweep_has_its_case_rerun_and_every_case_is_there_on
 
 
 def test_a_failing_case_is_reported_and_the_others_complete():
-    outcomes = map_cases(cubic_refusing_two, [(x, {"x": x}) for x in range(4)], workers=2, progress=False)
+    with cluster(workers=2) as where:  # one cluster for two calls, reached by its address
+        assert where["scheduler"].startswith("tcp://127.0.0.1:")
+        outcomes = map_cases(cubic_refusing_two, [(x, {"x": x}) for x in range(4)], progress=False, **where)
+        again = map_cases(cubic_refusing_two, [(5, {"x": 5})], progress=False, **where)
     assert outcomes[2] == CaseOutcome(2, None, "ValueError: x = 2 is out of range", 1)
     assert [o.value for o in outcomes if o.key != 2] == [0, 1, 27]
+    assert again == [CaseOutcome(5, 125, None, 1)]
     serial = map_cases(cubic_refusing_two, [(2, {"x": 2})], workers=0, progress=False)
     assert serial[0].error == "ValueError: x = 2 is out of range"
 
@@ -115,8 +119,22 @@ def test_accuracy_study_records_do_not_depend_on_where_the_runs_ran(coarse_cylin
               "critical_slip": [1.0e-3], "cycle_jump": [1000.0]}
     parallel = accuracy_study(coarse_cylinder, quick=True, sweeps=sweeps, workers=2)
     serial = accuracy_study(coarse_cylinder, quick=True, sweeps=sweeps, workers=0)
-    costs = ("wall_time_s", "cpu_time_s")
     assert len(parallel.records) == len(serial.records) == 3
     for ours, theirs in zip(parallel.records, serial.records):
-        assert {k: v for k, v in ours.items() if k not in costs} == {k: v for k, v in theirs.items() if k not in costs}
+        for costs in (ours, theirs):
+            del costs["wall_time_s"], costs["cpu_time_s"]
+        assert_same(ours, theirs)
     assert parallel.recommendation["label"] == serial.recommendation["label"]
+
+
+def assert_same(ours, theirs, where="record"):
+    """Equal, floats to round-off: the contact solver itself differs in the last digits between
+    two runs of one case in one process (max wear depth ~1e-13 relative)."""
+    if isinstance(ours, dict):
+        assert ours.keys() == theirs.keys(), where
+        for key in ours:
+            assert_same(ours[key], theirs[key], f"{where}.{key}")
+    elif isinstance(ours, float):
+        assert ours == pytest.approx(theirs, rel=1e-9, abs=1e-12), where
+    else:
+        assert ours == theirs, where

@@ -1,0 +1,113 @@
+"""Benchmark: parallel efficiency of independent cases on the embedded LocalCluster (`make bench`).
+
+Two 16-case studies, each run in this process without dask (workers=0), on a LocalCluster with
+one worker and with two (this machine has two cores): a 16-amplitude contact study (the
+cylinder on plane, tangential amplitude 0.02-0.14 mm, contact mesh 0.025 mm, 20 wear cycles,
+about 5 s a case) and a 16-speed multibody sweep (4 CB modes, 1.5 revolutions). Speed-up is
+the wall time on one worker over the wall time on two; efficiency is the speed-up over 2. The
+results of every run must equal the in-process ones (contact figures to 1e-9: the contact
+solver's last digits differ between two runs of a case even in one process). A third comparison times the sweep with
+the counterweight reduced once on the client and sent to the workers (what speed_sweep does)
+against reducing it in every case. Prints a table with the load average, which on a shared
+machine says how much of the two cores the study really had.
+"""
+
+import os
+import pickle
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mbs.counterweight import reduce_counterweight
+from mbs.parameters import ModelParams, SolverParams
+from mbs.sweep import run_speed, speed_sweep
+from pipelines.distributed import map_cases
+
+ROOT = Path(__file__).resolve().parents[2]
+CYLINDER = ROOT / "examples" / "cylinder_on_plane.toml"
+AMPLITUDES_MM = np.linspace(0.02, 0.14, 16)
+SPEEDS_RPM = np.linspace(600.0, 750.0, 16)
+SWEEP_PARAMS = ModelParams(n_modes=4, effects=frozenset({"gear_mesh"}),
+                           solver=SolverParams(revolutions=1.5, time_step=5e-5))
+
+
+def contact_case(amplitude_mm: float) -> dict:
+    """The cylinder on plane at one tangential amplitude (mm): wear depth (mm), slip area, verdict."""
+    from contact import procedure
+    from contact.solver import ContactSolver
+    from contact.structure import ContactSpace
+    from pipelines import scene as scenes
+    from pipelines.build import build
+
+    scene = scenes.load(CYLINDER, {
+        "motions": [{"name": "tangential", "dof": "cylinder.rp.ux", "value": float(amplitude_mm),
+                     "history": "cyclic"}],
+        "bodies.cylinder.mesh.contact_size": 0.025, "bodies.plane.mesh.contact_size": 0.025,
+        "procedure.wear_cycles": 20})
+    model = build(scene)
+    solver = ContactSolver(ContactSpace(model.assembly.structure), model.law, model.settings)
+    result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
+                           cof_evolution=False, wear=True)
+    return {"max_wear_depth_mm": result.figures["max_wear_depth_mm"],
+            "slip_area_fraction": result.figures["slip_area_fraction"], "verdict": result.verdict}
+
+
+def speed_case_reducing(params: ModelParams) -> object:
+    """A sweep case that reduces the counterweight itself instead of receiving it."""
+    return run_speed(params, reduce_counterweight(params.counterweight, params.n_modes), None)
+
+
+def _timed(function):
+    clock = time.perf_counter()
+    value = function()
+    return value, time.perf_counter() - clock
+
+
+def _sweep_arrays(result):
+    return [result.wing_amplitude, result.dominant_frequencies, result.system_frequencies]
+
+
+@pytest.mark.bench
+def test_parallel_efficiency_of_sixteen_independent_cases():
+    rows, load_before = [], os.getloadavg()[0]
+    cases = [(float(a), {"amplitude_mm": float(a)}) for a in AMPLITUDES_MM]
+    contact = {}
+    for workers in (0, 1, 2):
+        outcomes, contact[workers] = _timed(lambda: map_cases(contact_case, cases, workers=workers, progress=False))
+        assert all(o.ok for o in outcomes), [o.error for o in outcomes if not o.ok]
+        if workers == 0:
+            reference = [o.value for o in outcomes]
+        for ours, theirs in zip(outcomes, reference):  # the contact solver differs in the last digits run to run
+            assert ours.value["verdict"] == theirs["verdict"]
+            for name in ("max_wear_depth_mm", "slip_area_fraction"):
+                assert ours.value[name] == pytest.approx(theirs[name], rel=1e-9), (ours.key, name)
+    rows.append(("contact, 16 amplitudes", contact))
+
+    sweep = {}
+    for workers in (0, 1, 2):
+        result, sweep[workers] = _timed(lambda: speed_sweep(SWEEP_PARAMS, SPEEDS_RPM, workers=workers))
+        assert not result.failures
+        if workers == 0:
+            serial = _sweep_arrays(result)
+        for ours, theirs in zip(_sweep_arrays(result), serial):
+            np.testing.assert_array_equal(ours, theirs)
+    rows.append(("mbs sweep, 16 speeds", sweep))
+
+    from dataclasses import replace
+    speed_cases = [(s, {"params": replace(SWEEP_PARAMS, speed_rpm=float(s))}) for s in SPEEDS_RPM]
+    _, per_case = _timed(lambda: map_cases(speed_case_reducing, speed_cases, workers=2, progress=False))
+    reduced, reduction_s = _timed(lambda: reduce_counterweight(SWEEP_PARAMS.counterweight, SWEEP_PARAMS.n_modes))
+    size_mb = len(pickle.dumps(reduced)) / 1e6
+    load_after = os.getloadavg()[0]
+
+    lines = [f"{'study':<24} {'in-process s':>12} {'1 worker s':>10} {'2 workers s':>11} {'speed-up':>8} "
+             f"{'efficiency':>10}"]
+    for name, t in rows:
+        lines.append(f"{name:<24} {t[0]:>12.1f} {t[1]:>10.1f} {t[2]:>11.1f} {t[1] / t[2]:>8.2f} "
+                     f"{t[1] / t[2] / 2:>10.0%}")
+    lines.append(f"mbs sweep on 2 workers: CW reduced once and sent {sweep[2]:.1f} s, reduced in every case "
+                 f"{per_case:.1f} s (one reduction {reduction_s:.2f} s, {size_mb:.0f} MB pickled)")
+    lines.append(f"load average (1 min) before {load_before:.2f}, after {load_after:.2f}; {os.cpu_count()} cores")
+    print("\n" + "\n".join(lines))
