@@ -428,6 +428,24 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None
     return collect_histories(mbs, sensors, reduced, energy, wall_time)
 
 
+def _released_torsion_expansion(params: ModelParams, reduced: ReducedCounterweight | None,
+                                reduced_throw: ReducedThrow | None):
+    """Undamped eigen-analysis of the assembled model and the expansion x0 = V c of the state in
+    which every CW's torsion mode is released by 0.1: (frequencies Hz, V, c, ODE2 index of each
+    CW's first modal coordinate, reduced CW)."""
+    params.validate()
+    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
+    _system, mbs, items = _build(params, reduced, loads=False, reduced_throw=reduced_throw)  # _system owns mbs
+    mbs.Assemble()
+    frequencies, vectors = mbs.ComputeODE2Eigenvalues(convert2Frequencies=True, ignoreAlgebraicEquations=False)
+    frequencies, vectors = np.asarray(frequencies), np.asarray(vectors)
+    first_modal = [mbs.GetNodeODE2Index(node) for node in items.cw_modal_nodes]
+    released = np.zeros(vectors.shape[0])
+    released[[index + reduced.torsion_mode for index in first_modal]] = 0.1
+    participation = np.linalg.lstsq(vectors, released, rcond=None)[0]
+    return frequencies, vectors, participation, first_modal, reduced
+
+
 def torsion_decay_mode(params: ModelParams, reduced: ReducedCounterweight | None = None, *,
                        reduced_throw: ReducedThrow | None = None) -> tuple[float, float]:
     """Frequency (Hz) and amplitude of the coupled mode that dominates CW 1's torsion coordinate
@@ -441,18 +459,34 @@ def torsion_decay_mode(params: ModelParams, reduced: ReducedCounterweight | None
     costs about 7 ms per step, this analysis about a second. Measured against decay runs: flexible
     throw 394.3 Hz (decay 393.8), two rigid throws 493.9 Hz (decay 492.9). Where two modes share
     the torsion almost equally the answer is ambiguous: the single rigid throw rings at 399.9 and
-    692.9 Hz with shares 0.036 / 0.038 (this returns 692.9 Hz, a decay run's peak is 399.7 Hz).
+    692.9 Hz with shares 0.036 / 0.038 (this returns 692.9 Hz, a decay run's peak is 399.7 Hz);
+    wing_torsion_decay_components lists every mode's share of the measured signal instead.
     """
-    params.validate()
-    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
-    system, mbs, items = _build(params, reduced, loads=False, reduced_throw=reduced_throw)
-    mbs.Assemble()
-    frequencies, vectors = mbs.ComputeODE2Eigenvalues(convert2Frequencies=True, ignoreAlgebraicEquations=False)
-    frequencies, vectors = np.asarray(frequencies), np.asarray(vectors)
-    torsion = [mbs.GetNodeODE2Index(node) + reduced.torsion_mode for node in items.cw_modal_nodes]
-    released = np.zeros(vectors.shape[0])
-    released[torsion] = 0.1
-    participation = np.linalg.lstsq(vectors, released, rcond=None)[0]
-    amplitude = np.abs(participation * vectors[torsion[0], :]) * (frequencies > 1.0)
+    frequencies, vectors, participation, first_modal, reduced = _released_torsion_expansion(
+        params, reduced, reduced_throw)
+    amplitude = np.abs(participation * vectors[first_modal[0] + reduced.torsion_mode, :]) * (frequencies > 1.0)
     dominant = int(np.argmax(amplitude))
     return float(frequencies[dominant]), float(amplitude[dominant])
+
+
+def wing_torsion_decay_components(params: ModelParams, reduced: ReducedCounterweight | None = None, *,
+                                  count: int = 4, reduced_throw: ReducedThrow | None = None) -> list[tuple[float, float]]:
+    """The ``count`` largest sinusoids of CW 1's wing torsion (u(+x) - u(-x))/2 in the free-decay
+    test (every CW's torsion mode released by 0.1, damping and excitation off), as
+    (frequency Hz, amplitude mm), largest first, from the eigen-analysis of the assembled model.
+
+    Component i of the signal is c_i T V_i: the released state's expansion coefficient times the
+    wing-torsion shape T applied to CW 1's modal coordinates of eigenvector i. This is what a
+    decay run's spectrum shows; in the single rigid throw two coupled modes carry almost equal
+    shares (750 rpm: 399.9 and 692.9 Hz), so "the" torsion frequency is the lower one by the
+    paper's naming, and a spectrum's highest peak may be either. Undamped, linearised at the
+    initial state, no gyroscopic terms (as system_eigenfrequencies).
+    """
+    frequencies, vectors, participation, first_modal, reduced = _released_torsion_expansion(
+        params, reduced, reduced_throw)
+    tips = reduced.wing_tip_axial_shapes()
+    torsion_shape = 0.5 * (tips[1] - tips[0])
+    cw1 = vectors[first_modal[0]:first_modal[0] + reduced.n_modes, :]
+    amplitude = np.abs(participation * (torsion_shape @ cw1)) * (frequencies > 1.0)
+    largest = np.argsort(amplitude)[::-1][:count]
+    return [(float(frequencies[i]), float(amplitude[i])) for i in largest]

@@ -16,7 +16,7 @@ joint, at the documented time step (5e-5 s, generalized-alpha ρ∞ = 0.9, mbs/N
 
 Checks: the run converges (a SimulationError fails the fixture), no NaN/Inf in any history,
 the joint's radial deflection and force against the closed form m ω² r_cg / k, energy on a
-free shaft, the coupled torsion frequency of a free decay against the eigenvalue of the
+free shaft, the coupled torsion frequencies of a free decay against the eigenvalues of the
 assembled model, and the unresolved top mode against generalized-alpha's own amplification
 factor. The documented step against half of it: tests/bench/test_bench_multibody_hard.py.
 Units: mm, N, t, s.
@@ -32,7 +32,7 @@ import pytest
 
 from mbs.counterweight import reduce_counterweight
 from mbs.joint import scene_joint_stiffness
-from mbs.model import simulate, torsion_decay_mode
+from mbs.model import simulate, wing_torsion_decay_components
 from mbs.parameters import CrankThrowParams, ModelParams, SolverParams
 from mbs.spectra import peak_frequency
 
@@ -111,14 +111,23 @@ def test_energy_is_conserved_on_a_free_shaft(reduced):
     assert drift < 1e-4
 
 
-def test_torsion_free_decay_rings_at_the_coupled_eigenvalue(reduced):
+def test_torsion_free_decay_rings_at_the_coupled_eigenvalues(reduced):
+    """Released torsion mode, damping and excitation off: the wing torsion rings at several
+    coupled modes (at 975 rpm 397.4 Hz and 687.8 Hz carry almost equal shares, then 559.2 Hz;
+    mbs.model.wing_torsion_decay_components). Each of the three largest must show in the
+    decay's spectrum within 1 % of its eigenvalue, and within 0.2 % once the integrator's own
+    period error at its ω·Δt (0.13 % at 397 Hz, 0.39 % at 688 Hz) is taken out."""
     params = replace(hard_case(revolutions=2.0, damping=False), effects=QUIET)
     released = np.zeros(N_MODES)
     released[reduced.torsion_mode] = 0.1
     run = simulate(params, reduced=reduced, initial_modal_coordinates=released)
-    measured = peak_frequency(run.time, run.wing_torsion[0], band=(100.0, 2000.0))
-    eigenvalue, _ = torsion_decay_mode(params, reduced)
-    assert measured == pytest.approx(eigenvalue, rel=0.01)
+    components = wing_torsion_decay_components(params, reduced, count=3)
+    assert components[0][1] > 0.1  # mm: the release does move the wings
+    for eigenvalue, _ in components:
+        measured = peak_frequency(run.time, run.wing_torsion[0], band=(0.97 * eigenvalue, 1.03 * eigenvalue))
+        assert measured == pytest.approx(eigenvalue, rel=0.01)
+        root = generalized_alpha_root(2.0 * math.pi * eigenvalue * TIME_STEP, params.solver.spectral_radius)
+        assert measured == pytest.approx(np.angle(root) / (2.0 * math.pi * TIME_STEP), rel=0.002)
 
 
 def test_unresolved_top_mode_decays_at_the_generalized_alpha_rate(reduced):
