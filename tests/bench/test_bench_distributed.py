@@ -15,6 +15,7 @@ machine says how much of the two cores the study really had.
 import os
 import pickle
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +24,7 @@ import pytest
 from mbs.counterweight import reduce_counterweight
 from mbs.parameters import ModelParams, SolverParams
 from mbs.sweep import run_speed, speed_sweep
-from pipelines.distributed import map_cases
+from pipelines.distributed import cluster, map_cases
 
 ROOT = Path(__file__).resolve().parents[2]
 CYLINDER = ROOT / "examples" / "cylinder_on_plane.toml"
@@ -57,6 +58,11 @@ def contact_case(amplitude_mm: float) -> dict:
 def speed_case_reducing(params: ModelParams) -> object:
     """A sweep case that reduces the counterweight itself instead of receiving it."""
     return run_speed(params, reduce_counterweight(params.counterweight, params.n_modes), None)
+
+
+def _start_and_close_a_two_worker_cluster():
+    with cluster(workers=2):
+        pass
 
 
 def _timed(function):
@@ -95,9 +101,9 @@ def test_parallel_efficiency_of_sixteen_independent_cases():
             np.testing.assert_array_equal(ours, theirs)
     rows.append(("mbs sweep, 16 speeds", sweep))
 
-    from dataclasses import replace
     speed_cases = [(s, {"params": replace(SWEEP_PARAMS, speed_rpm=float(s))}) for s in SPEEDS_RPM]
     _, per_case = _timed(lambda: map_cases(speed_case_reducing, speed_cases, workers=2, progress=False))
+    _, startup_s = _timed(_start_and_close_a_two_worker_cluster)
     reduced, reduction_s = _timed(lambda: reduce_counterweight(SWEEP_PARAMS.counterweight, SWEEP_PARAMS.n_modes))
     size_mb = len(pickle.dumps(reduced)) / 1e6
     load_after = os.getloadavg()[0]
@@ -109,5 +115,6 @@ def test_parallel_efficiency_of_sixteen_independent_cases():
                      f"{t[1] / t[2] / 2:>10.0%}")
     lines.append(f"mbs sweep on 2 workers: CW reduced once and sent {sweep[2]:.1f} s, reduced in every case "
                  f"{per_case:.1f} s (one reduction {reduction_s:.2f} s, {size_mb:.0f} MB pickled)")
+    lines.append(f"starting and closing the two-worker LocalCluster: {startup_s:.1f} s (paid once per study)")
     lines.append(f"load average (1 min) before {load_before:.2f}, after {load_after:.2f}; {os.cpu_count()} cores")
     print("\n" + "\n".join(lines))
