@@ -7,8 +7,8 @@
   per core, BLAS pinned to one thread in the workers so two workers do not fight over a core),
   started for the call and closed afterwards; nothing to configure;
 - ``scheduler="tcp://HOST:PORT"``: the same work on an existing dask cluster (its workers need
-  fretwork installed); an address that does not answer within ``CONNECT_TIMEOUT_S`` is an
-  InputError naming it;
+  fretwork installed); an address that does not answer within ``CONNECT_TIMEOUT_S``, or a
+  scheduler without workers, is an InputError naming it;
 - ``workers=0``: in this process, one case after the other, without dask (debugging; a single
   case on the embedded cluster also runs here, a cluster start-up would cost more than it).
 
@@ -183,6 +183,11 @@ def _client(scheduler: str | None, workers: int | None, n_cases: int, retries: i
                              "workers with `dask worker ADDRESS`, or leave --scheduler out to use "
                              "this machine") from None
         with client:
+            try:  # cases sent to a scheduler without workers would wait for ever
+                client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
+            except TimeoutError:
+                raise InputError(f"--scheduler {scheduler}: the scheduler has no workers (none joined within "
+                                 f"{CONNECT_TIMEOUT_S:g} s); start some with `dask worker {scheduler}`") from None
             yield client
         return
     with _local_cluster(workers, retries, n_cases) as local, Client(local, set_as_default=False) as client:

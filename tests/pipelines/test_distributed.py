@@ -70,7 +70,14 @@ def test_a_failing_case_is_reported_and_the_others_complete():
     assert serial[0].error == "ValueError: x = 2 is out of range"
 
 
-def test_bad_cluster_settings_are_named():
+def test_bad_cluster_settings_are_named(monkeypatch):
+    from distributed import LocalCluster
+
+    monkeypatch.setattr(distributed, "CONNECT_TIMEOUT_S", 0.5)
+    with LocalCluster(n_workers=0, dashboard_address=None,
+                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as empty:
+        with pytest.raises(InputError, match="the scheduler has no workers"):
+            map_cases(cubic, [(1, {"x": 1}), (2, {"x": 2})], scheduler=empty.scheduler_address)
     with pytest.raises(InputError, match="--workers -1"):
         map_cases(cubic, [(1, {"x": 1})], workers=-1)
     with pytest.raises(InputError, match="tcp://HOST:PORT"):
