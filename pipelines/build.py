@@ -7,7 +7,7 @@ are read from the scene. Only what the scene's effects call for is created.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +17,11 @@ from contact.assembly import Assembly, Body, ReferencePoint, assemble
 from contact.law import ContactLaw, ContactState
 from contact.procedure import LoadProgram, Procedure
 from contact.solver import NewtonSettings
+from contact.tabulated import TabulatedProgram
+from pipelines import coupling as coupling_
 from pipelines import meshes
-from pipelines.scene import Scene
+from pipelines.scene import MULTIBODY_EFFECTS, Scene
+from pipelines.stages import StageCache
 from reduction.body_loads import centrifugal, gravity
 from reduction.elasticity import assemble_elastic_body
 from reduction.errors import InputError
@@ -38,12 +41,98 @@ class Model:
     procedure: Procedure
     settings: NewtonSettings
     meshes: dict
+    coupling: "Coupled | None" = None
 
     def initial_state(self) -> ContactState:
         n_tangent = self.scene.dimension - 1
         wear_bodies = 2 if "wear" in self.scene.effects else None
         return ContactState.initial(self.assembly.structure.n_points, n_tangent,
                                     self.scene.data["contact"]["cof_initial"], wear_bodies)
+
+
+@dataclass(frozen=True)
+class Coupled:
+    """The multibody side of a coupled scene: settings, the multibody run, the cycle histories."""
+
+    settings: coupling_.CouplingSettings
+    loading: coupling_.MultibodyLoading
+    cycle: coupling_.CycleLoading
+    patterns: tuple
+
+    def summary(self) -> dict:
+        return {"wing_amplitude_mm": self.cycle.wing_amplitude,
+                "multibody_wing_amplitude_mm": self.cycle.multibody_wing_amplitude,
+                "vibration_scale": self.cycle.scale, "load_cycle": self.cycle.cycle,
+                "load_cycle_frequency_hz": self.cycle.frequency_hz, "engine_speed_rpm": self.loading.speed_rpm}
+
+
+def multibody_params(scene: Scene):
+    """mbs.ModelParams of a coupled scene: its [mbs] table with the scene's multibody effects."""
+    from mbs.scene import model_params_from_mapping
+
+    table = dict(scene.section("mbs"))
+    table["effects"] = sorted(set(scene.effects) & set(MULTIBODY_EFFECTS))
+    base = scene.path.parent if scene.path else Path(".")
+    return model_params_from_mapping(table, where="[mbs]", folder=base)
+
+
+def multibody_loading(scene: Scene, cache: StageCache | None = None) -> coupling_.MultibodyLoading:
+    """The multibody stage of a coupled scene (read from the cache when its inputs are unchanged)."""
+    params = multibody_params(scene)
+    counterweight = scene.data["coupling"].get("counterweight", 1)
+    cache = cache or StageCache(None)
+    return cache.get("multibody", {"params": params, "counterweight": counterweight},
+                     lambda: coupling_.run_multibody(params, counterweight))
+
+
+def coupling_settings(scene: Scene) -> coupling_.CouplingSettings:
+    table = scene.data["coupling"]
+    return coupling_.CouplingSettings(body=table["body"], counterweight=table.get("counterweight", 1),
+                                      cycle=table.get("cycle", "wing_period"),
+                                      wing_amplitude=table.get("wing_amplitude"),
+                                      fields=table.get("fields", "all"))
+
+
+def _coupled_patterns(scene: Scene, elastic, mesh, loading) -> dict:
+    """The CW's unit inertia patterns that the scene's effects call for."""
+    geometry = loading.geometry
+    low, high = mesh.p.min(axis=1), mesh.p.max(axis=1)
+    expected_low = np.array([-0.5 * geometry["width"], 0.0, -0.5 * geometry["thickness"]])
+    expected_high = np.array([0.5 * geometry["width"], geometry["height"], 0.5 * geometry["thickness"]])
+    if not (np.allclose(low, expected_low, atol=1e-6 * geometry["width"])
+            and np.allclose(high, expected_high, atol=1e-6 * geometry["width"])):
+        raise InputError(f"'coupling.body' mesh spans {low.round(3).tolist()} … {high.round(3).tolist()} mm, but "
+                         f"the multibody counterweight spans {expected_low.tolist()} … {expected_high.tolist()} mm "
+                         "in its frame (contact face y = 0): give both the same geometry ([mbs.counterweight])")
+    if scene.data["coupling"].get("fields", "all") == "wing_mode":
+        patterns = {}
+        if "centrifugal" in scene.effects:
+            patterns["centrifugal"] = coupling_.centrifugal_pattern(elastic, loading)
+        if "flexible_counterweight" in scene.effects:
+            face = np.flatnonzero(np.abs(mesh.p[1]) < 1e-6 * geometry["height"])
+            patterns["wing_mode"] = coupling_.wing_mode_pattern(elastic, loading, face)
+        return patterns
+    patterns = coupling_.inertia_patterns(elastic, loading)
+    keep = {name for name in patterns if name.startswith(("frame_", "alpha_"))}
+    if "centrifugal" in scene.effects:
+        keep.add("spin_squared")
+    if "flexible_counterweight" in scene.effects:
+        keep |= {name for name in patterns if name.startswith(("mode_", "coriolis_"))}
+    return {name: patterns[name] for name in patterns if name in keep}
+
+
+def coupled_program(model: "Model", wing_amplitude: float | None = None) -> "Model":
+    """The model with its cycle histories rebuilt for another wing amplitude (mm; None: the
+    multibody amplitude). Nothing is re-condensed: the patterns are per unit history value."""
+    coupled = model.coupling
+    settings = replace(coupled.settings, wing_amplitude=wing_amplitude)
+    cycle = coupling_.cycle_loading(coupled.loading, settings, model.procedure.increments_per_cycle)
+    tables = {name: cycle.tables[name] for name in coupled.patterns}
+    if "centrifugal" not in model.scene.effects:  # the spin's mean belongs to the centrifugal effect
+        tables = {name: values - values.mean() if name.startswith("frame_") else values
+                  for name, values in tables.items()}
+    program = TabulatedProgram(model.program.patterns, model.program.shapes, model.program.held, tables)
+    return replace(model, program=program, coupling=Coupled(settings, coupled.loading, cycle, coupled.patterns))
 
 
 def select_points(coordinates: np.ndarray, selection: dict, where: str, sets=None) -> np.ndarray:
@@ -112,13 +201,18 @@ def make_mesh(spec: dict, where: str, base: Path | None):
     return model.mesh, model
 
 
-def build(scene: Scene, meshes_override: dict | None = None) -> Model:
+def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCache | None = None,
+          multibody: "coupling_.MultibodyLoading | None" = None) -> Model:
     """Assemble and condense the scene's bodies and read its law, loads and procedure.
 
     meshes_override: body name → scikit-fem mesh used instead of the scene's (e.g. a mesh
-    whose surface was moved by wear).
+    whose surface was moved by wear). cache: where the multibody stage of a coupled scene is
+    kept (None: always computed); multibody: its result when the caller already has it.
     """
     data = scene.data
+    coupled_body = data.get("coupling", {}).get("body")
+    loading = (multibody or multibody_loading(scene, cache)) if coupled_body else None
+    coupled_patterns = ()
     dim = scene.dimension
     base = scene.path.parent if scene.path else None
     bodies, built_meshes, named_sets = [], {}, {}
@@ -155,6 +249,10 @@ def build(scene: Scene, meshes_override: dict | None = None) -> Model:
                 omega = entry["angular_velocity"]
                 body_loads[entry["name"]] = centrifugal(elastic, omega[0] if dim == 2 else omega,
                                                         entry.get("axis_point"))
+        if name == coupled_body:
+            inertia = _coupled_patterns(scene, elastic, mesh, loading)
+            body_loads.update(inertia)
+            coupled_patterns = tuple(inertia)
         bodies.append(Body(name, elastic, fixed_nodes, components, references, body_loads))
     contact = data["contact"]
     slave_mesh = built_meshes[contact["slave"]["body"]]
@@ -178,6 +276,7 @@ def build(scene: Scene, meshes_override: dict | None = None) -> Model:
                         search_distance=contact.get("search_distance", np.inf), bolts=bolts)
     shapes = {e["name"]: e["history"] for kind in ("loads", "motions", "body_loads") for e in data.get(kind, [])}
     shapes.update({f"bolt.{bolt.name}": "ramp" for bolt in bolts})
+    shapes.update({name: "history" for name in coupled_patterns})
     program = LoadProgram(assembly.structure.patterns, shapes)
     law = ContactLaw(
         normal_stiffness=contact["normal_stiffness"],
@@ -193,4 +292,8 @@ def build(scene: Scene, meshes_override: dict | None = None) -> Model:
                              if k in Procedure.__dataclass_fields__})
     settings = NewtonSettings(wear_cap=proc.get("wear_cap", np.inf),
                               max_cutbacks=proc.get("max_cutbacks", NewtonSettings.max_cutbacks))
-    return Model(scene, assembly, law, program, procedure, settings, built_meshes)
+    model = Model(scene, assembly, law, program, procedure, settings, built_meshes)
+    if coupled_body is None:
+        return model
+    model = replace(model, coupling=Coupled(coupling_settings(scene), loading, None, coupled_patterns))
+    return coupled_program(model, model.coupling.settings.wing_amplitude)

@@ -18,12 +18,26 @@ def _json(value) -> str:
     return json.dumps(value, indent=2, default=float)
 
 
+def _cache(args):
+    from pipelines.stages import StageCache, default_directory
+
+    return None if getattr(args, "no_cache", False) else (args.cache or str(default_directory()))
+
+
+def _add_cache_arguments(parser) -> None:
+    parser.add_argument("--cache", default=None, metavar="DIR",
+                        help="stage cache (default: $FRETWORK_CACHE or ./.fretwork-cache)")
+    parser.add_argument("--no-cache", action="store_true", help="compute every stage, keep nothing")
+
+
 def cmd_run(args) -> int:
     from pipelines import scene
     from pipelines.run import run_scene
+    from pipelines.stages import StageCache
 
     loaded = scene.load(args.scene)
-    outcome = run_scene(loaded, args.out, progress=not args.quiet, resume=args.resume)
+    outcome = run_scene(loaded, args.out, progress=not args.quiet, resume=args.resume,
+                        cache=StageCache(_cache(args)))
     if args.json:
         print(_json(outcome.summary))
     else:
@@ -65,12 +79,74 @@ def cmd_validate(args) -> int:
 
 
 def cmd_demo(args) -> int:
-    from pipelines import scene
-    from pipelines.run import run_scene
+    from pipelines.demo import describe, run_demo
 
-    loaded = scene.load(EXAMPLES / "cylinder_on_plane.toml")
-    outcome = run_scene(loaded, args.out, progress=True)
-    print(_human_summary(outcome))
+    result = run_demo(args.out, cache_dir=_cache(args), workers=args.workers, progress=not args.quiet)
+    print(_json({"summary": result.summary, "stage_times_s": result.stage_times, "files": result.files})
+          if args.json else describe(result))
+    return 0
+
+
+def cmd_limit(args) -> int:
+    from pipelines.limit import find_limit, parse_range_um, plot_limit, write_limit
+    from pipelines import scene as scenes
+
+    low, high = parse_range_um(args.amplitude)
+    if args.tolerance <= 0:
+        raise InputError("--tolerance must be positive (µm)")
+    name = scenes.load(args.scene).name
+    out = Path(args.out)
+    result = find_limit(args.scene, low, high, tolerance_mm=1e-3 * args.tolerance, cache_dir=_cache(args),
+                        out_dir=out / "runs", scheduler=args.scheduler, workers=args.workers,
+                        progress=not args.quiet)
+    plot = plot_limit(result, out / "limit.png", name)
+    summary = dict(result.to_json(), plot=str(plot), file=str(write_limit(result, out / "limit.json")))
+    if args.json:
+        print(_json(summary))
+    else:
+        for run in summary["runs"]:
+            print(f"  {run['amplitude_um']:8.1f} µm: {run['verdict'] or 'FAILED ' + str(run['error'])}"
+                  + (f", clamp-force loss {100 * run['clamp_force_loss_fraction']:.2f} %, damaged area "
+                     f"{100 * run['damaged_area_fraction']:.1f} %" if run.get("clamp_force_loss_fraction") is not None else ""))
+        if result.limit_mm is None:
+            print(f"{name}: not stuck even at {1e3 * low:.0f} µm: the limit lies below the range")
+        elif result.bracket_mm[1] is None:
+            print(f"{name}: still stuck at {1e3 * high:.0f} µm: the limit lies above the range")
+        else:
+            print(f"{name}: amplitude limit {1e3 * result.limit_mm:.1f} µm (stuck); {1e3 * result.bracket_mm[1]:.1f} µm "
+                  f"is not (tolerance {args.tolerance:g} µm)")
+        print(f"  plot: {plot}")
+    return 0
+
+
+def cmd_sweep(args) -> int:
+    """`fretwork sweep`: the multibody speed sweep; with --margins also the amplitude limit and the margins."""
+    if not args.margins:
+        return args.multibody_handler(args)
+    from mbs.sweep import parse_speeds
+    from pipelines.limit import parse_range_um
+    from pipelines.margins import margin_sweep, plot_margins
+    from pipelines import scene as scenes
+
+    speeds = parse_speeds(args.speeds)
+    low, high = parse_range_um(args.amplitude)
+    name = scenes.load(args.scene).name
+    out = Path(args.out)
+    result, _ = margin_sweep(args.scene, speeds, amplitude_range_mm=(low, high), tolerance_mm=1e-3 * args.tolerance,
+                             cache_dir=_cache(args), sweep_path=out, out_dir=out.parent / "limit_runs",
+                             scheduler=args.scheduler, workers=args.workers, progress=True)
+    plot = plot_margins(result, (Path(args.plots) if args.plots else out.parent) / "margins.png",
+                        f"{name}: fretting safety margin")
+    summary = dict(result.to_json(), file=str(out), plot=str(plot))
+    if args.json:
+        print(_json(summary))
+    else:
+        print(f"{'rpm':>8} {'wing µm':>9} {'margin':>8}")
+        for speed, amplitude, margin in zip(result.speeds_rpm, result.wing_amplitude_mm, result.margin):
+            print(f"{speed:8.1f} {1e3 * amplitude:9.1f} {margin:8.2f}" + ("  < 1: NOT SAFE" if margin < 1 else ""))
+        print(f"amplitude limit {summary['limit_um']} µm (searched at {result.limit_speed_rpm:.0f} rpm); "
+              f"calibration factor {result.calibration:.4g}")
+        print(f"results: {out}, plot: {plot}")
     return 0
 
 
@@ -115,15 +191,36 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.add_argument("--resume", action="store_true",
                      help="continue an interrupted run from DIR/checkpoint.h5")
+    _add_cache_arguments(run)
     run.set_defaults(func=cmd_run)
     validate = sub.add_parser("validate", help="validation against closed forms and reference models")
     validate.add_argument("--json", action="store_true")
     validate.add_argument("--quick", action="store_true", help="coarser settings (CI)")
     validate.add_argument("--out", default="results/validation")
     validate.set_defaults(func=cmd_validate)
-    demo = sub.add_parser("demo", help="run the main job on the built-in default scene")
+    demo = sub.add_parser("demo", help="run the main job on the built-in default scene",
+                          description="The crankshaft-counterweight pipeline end to end on examples/counterweight.toml "
+                                      "at a demo resolution: multibody run, contact model, COF and wear phases, "
+                                      "amplitude limit, speed sweep to safety margins.")
     demo.add_argument("--out", default="results/demo")
+    demo.add_argument("--json", action="store_true")
+    demo.add_argument("--quiet", action="store_true", help="no progress bars")
+    demo.add_argument("--workers", type=int, default=None, help="worker processes for the limit and sweep cases")
+    _add_cache_arguments(demo)
     demo.set_defaults(func=cmd_demo)
+    limit = sub.add_parser("limit", help="largest wing amplitude that still ends stuck (bisection)",
+                           description="Run the coupled scene's COF and wear phases at wing amplitudes in the "
+                                       "range and narrow the bracket around the stick limit to the tolerance.")
+    limit.add_argument("scene")
+    limit.add_argument("--amplitude", required=True, metavar="LOW:HIGH", help="wing amplitude range, µm (e.g. 100:400)")
+    limit.add_argument("--tolerance", type=float, default=10.0, help="width of the final bracket, µm (default 10)")
+    limit.add_argument("--out", default="results/limit")
+    limit.add_argument("--json", action="store_true")
+    limit.add_argument("--quiet", action="store_true")
+    _add_cache_arguments(limit)
+    from pipelines.distributed import add_cluster_arguments
+    add_cluster_arguments(limit)
+    limit.set_defaults(func=cmd_limit)
     reduce = sub.add_parser("reduce", help="accuracy of a Craig-Bampton reduction of a mesh")
     reduce.add_argument("mesh", help="mesh file (Abaqus .inp, Gmsh .msh, ...) with named node sets")
     reduce.add_argument("--modes", type=int, required=True, help="fixed-interface modes")
@@ -148,7 +245,14 @@ def build_parser() -> argparse.ArgumentParser:
     from mbs.cli import add_run_parser, add_sweep_parser
     from pipelines.fmu import add_export_fmu_parser
     add_export_fmu_parser(sub)
-    add_sweep_parser(sub)
+    sweep = add_sweep_parser(sub)
+    sweep.add_argument("--margins", action="store_true",
+                       help="also find the amplitude limit of the coupled scene and report limit / amplitude per speed")
+    sweep.add_argument("--amplitude", default="50:500", metavar="LOW:HIGH",
+                       help="with --margins: wing amplitude range of the limit search, µm (default %(default)s)")
+    sweep.add_argument("--tolerance", type=float, default=10.0, help="with --margins: limit tolerance, µm")
+    _add_cache_arguments(sweep)
+    sweep.set_defaults(multibody_handler=sweep.get_default("handler"), handler=cmd_sweep)
     add_run_parser(sub)
     return parser
 

@@ -181,3 +181,101 @@ def beam_with_hole(length: float, width: float, thickness: float, hole_x: float,
     if side == "lower":
         t = t[[3, 5, 6, 0, 7, 1, 2, 4]]  # mirror in z: swap the two layers to keep volumes positive
     return skfem.MeshHex(np.vstack([x, y, z]), t)
+
+
+def grid_lines(start: float, end: float, breaks, fine: tuple[float, float], fine_size: float,
+               coarse_size: float, growth: float = 1.3) -> np.ndarray:
+    """Sorted 1D grid coordinates on [start, end] (mm) through every point of ``breaks``.
+
+    Uniform spacing of at most ``fine_size`` on the interval ``fine``; elsewhere the spacing
+    grows by ``growth`` away from the fine interval up to ``coarse_size``. Two meshes built
+    with the same breaks and fine interval share their lines on that interval (matching faces).
+    """
+    fine_low, fine_high = max(start, fine[0]), min(end, fine[1])
+    points = np.unique(np.round(np.concatenate([[start, end, fine_low, fine_high],
+                                                [b for b in breaks if start <= b <= end]]), 9))
+    lines = [points[:1]]
+    for low, high in zip(points[:-1], points[1:]):
+        length = high - low
+        if fine_low - 1e-9 <= low and high <= fine_high + 1e-9:
+            n = int(np.ceil(length / fine_size - 1e-9))
+            lines.append(np.linspace(low, high, n + 1)[1:])
+            continue
+        # graded away from the fine interval: sizes fine_size·growth^k capped at coarse_size
+        sizes, total, h = [], 0.0, fine_size
+        while total < length - 1e-9:
+            h = min(h * growth, coarse_size)
+            sizes.append(h)
+            total += h
+        sizes = np.asarray(sizes) * length / total
+        if high <= fine_low + 1e-9:  # left of the fine interval: finest next to it
+            sizes = sizes[::-1]
+        lines.append(low + np.cumsum(sizes))
+    coordinates = np.concatenate(lines)
+    coordinates[-1] = end
+    return coordinates
+
+
+def union_of_boxes(x: np.ndarray, y: np.ndarray, z: np.ndarray, solids, voids=()) -> skfem.MeshHex:
+    """Hexahedral mesh of the tensor grid x × y × z restricted to the union of ``solids`` minus
+    ``voids`` (each box ((x0, y0, z0), (x1, y1, z1)) in mm; box faces should lie on grid lines)."""
+    mesh = skfem.MeshHex.init_tensor(x, y, z)
+    centroid = mesh.p[:, mesh.t].mean(axis=1).T
+
+    def inside(boxes):
+        mask = np.zeros(len(centroid), dtype=bool)
+        for low, high in boxes:
+            mask |= np.all((centroid > np.asarray(low)) & (centroid < np.asarray(high)), axis=1)
+        return mask
+
+    keep = inside(solids) & ~inside(voids)
+    if not keep.any():
+        raise InputError("the boxes of the mesh contain no grid cell")
+    return mesh.remove_elements(np.flatnonzero(~keep))
+
+
+def counterweight_block(width: float, height: float, thickness: float, hub_width: float, hub_height: float,
+                        screw_x: float, hole_half_size: float, contact_size: float,
+                        coarse_size: float | None = None) -> skfem.MeshHex:
+    """Generic counterweight in its own frame (the multibody model's, mbs.counterweight): contact
+    face y = 0 of the hub |x| ≤ hub_width/2, wing plate |x| ≤ width/2 over hub_height ≤ y ≤
+    height, thickness along z; square through holes (half-size ``hole_half_size``) for two
+    screws at x = ±screw_x. Element size ``contact_size`` on the hub face, graded to ``coarse_size``.
+    """
+    if not (0 < hub_width < width and 0 < hub_height < height and
+            hole_half_size < screw_x < 0.5 * hub_width - hole_half_size and 2 * hole_half_size < thickness):
+        raise InputError("counterweight_block: needs hub_width < width, hub_height < height and the screw "
+                         "holes inside the hub face (hole_half_size < screw_x < hub_width/2 − hole_half_size)")
+    coarse = coarse_size or 4.0 * contact_size
+    half_hub, half_t = 0.5 * hub_width, 0.5 * thickness
+    holes_x = [s * screw_x + d * hole_half_size for s in (-1, 1) for d in (-1, 1)]
+    x = grid_lines(-0.5 * width, 0.5 * width, holes_x + [-half_hub, half_hub], (-half_hub, half_hub),
+                   contact_size, coarse)
+    y = grid_lines(0.0, height, [hub_height], (0.0, min(2.0 * contact_size, hub_height)), contact_size, coarse)
+    z = grid_lines(-half_t, half_t, [-hole_half_size, hole_half_size], (-half_t, half_t), contact_size, coarse)
+    solids = [((-half_hub, 0.0, -half_t), (half_hub, hub_height, half_t)),
+              ((-0.5 * width, hub_height, -half_t), (0.5 * width, height, half_t))]
+    voids = [((s * screw_x - hole_half_size, -1.0, -hole_half_size),
+              (s * screw_x + hole_half_size, height + 1.0, hole_half_size)) for s in (-1, 1)]
+    return union_of_boxes(x, y, z, solids, voids)
+
+
+def web_block(width: float, depth: float, thickness: float, hub_width: float, screw_x: float,
+              hole_half_size: float, hole_depth: float, contact_size: float,
+              coarse_size: float | None = None) -> skfem.MeshHex:
+    """The crank-web side of a counterweight joint: block |x| ≤ width/2, −depth ≤ y ≤ 0, thickness
+    along z, with blind threaded holes (square, half-size ``hole_half_size``, ``hole_depth`` deep)
+    at x = ±screw_x. Its face y = 0 matches :func:`counterweight_block` on the hub (same lines)."""
+    if not (hub_width <= width and hole_depth < depth):
+        raise InputError("web_block: needs hub_width <= width and hole_depth < depth")
+    coarse = coarse_size or 4.0 * contact_size
+    half_hub, half_t = 0.5 * hub_width, 0.5 * thickness
+    holes_x = [s * screw_x + d * hole_half_size for s in (-1, 1) for d in (-1, 1)]
+    x = grid_lines(-0.5 * width, 0.5 * width, holes_x + [-half_hub, half_hub], (-half_hub, half_hub),
+                   contact_size, coarse)
+    y = -grid_lines(0.0, depth, [hole_depth], (0.0, min(2.0 * contact_size, hole_depth)), contact_size, coarse)[::-1]
+    z = grid_lines(-half_t, half_t, [-hole_half_size, hole_half_size], (-half_t, half_t), contact_size, coarse)
+    solids = [((-0.5 * width, -depth, -half_t), (0.5 * width, 0.0, half_t))]
+    voids = [((s * screw_x - hole_half_size, -hole_depth, -hole_half_size),
+              (s * screw_x + hole_half_size, 1.0, hole_half_size)) for s in (-1, 1)]
+    return union_of_boxes(x, y, z, solids, voids)

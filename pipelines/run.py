@@ -16,17 +16,29 @@ from pipelines.paraview import write_final_vtu, write_interface_series
 from pipelines.plots import plot_results
 from pipelines.results import ResultsWriter
 from pipelines.scene import Scene
+from pipelines.stages import StageCache
 from reduction.errors import InputError
 
 
 class ProgressBar:
-    """tqdm bar over the load cycles of all phases, with the current slip and stick areas."""
+    """tqdm bar over the load cycles of all phases, with the current slip and stick areas; it
+    also times each phase (``phase_times``, s)."""
 
     def __init__(self, total_cycles: int, enabled: bool, label: str, done: int = 0):
         self.bar = tqdm(total=total_cycles, initial=done, unit="cycle", disable=not enabled, desc=label,
                         dynamic_ncols=True, leave=True)
+        self.phase_times: dict[str, float] = {}
+        self._current: tuple[str, float] | None = None
+
+    def _stop_clock(self):
+        if self._current is not None:
+            name, start = self._current
+            self.phase_times[name] = self.phase_times.get(name, 0.0) + time.perf_counter() - start
+            self._current = None
 
     def phase(self, name, n_cycles):
+        self._stop_clock()
+        self._current = (name, time.perf_counter())
         self.bar.set_description(f"{name}")
 
     def increment(self, record):
@@ -39,6 +51,7 @@ class ProgressBar:
         self.bar.update(1)
 
     def close(self):
+        self._stop_clock()
         self.bar.close()
 
 
@@ -83,28 +96,42 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
         bar.close()
         raise
     bar.close()
+    stage_times.update({f"{name}_phase_s": seconds for name, seconds in bar.phase_times.items()})
     stage_times["procedure_s"] = time.perf_counter() - clock
+    clock = time.perf_counter()
     path = writer.finish(result)
     written = plot_results(path, out_dir / "plots") if plots else []
     write_interface_series(path, out_dir / "interface.xdmf")
     write_final_vtu(path, out_dir / "interface_final.vtu")
+    stage_times["outputs_s"] = time.perf_counter() - clock
     summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
                **result.figures}
+    if model.coupling is not None:
+        summary.update(model.coupling.summary())
     if writer.snapshot is not None:
         summary["resumed_from_cycle"] = writer.snapshot.cycle_number
     return Outcome(summary, path, written, stage_times)
 
 
 def run_scene(scene: Scene, out_dir: str | Path, *, progress: bool = True, plots: bool = True,
-              resume: bool = False) -> Outcome:
+              resume: bool = False, cache: StageCache | None = None) -> Outcome:
     """Build the scene's model and run it into ``out_dir``; see :func:`run_model`.
 
     resume: continue from ``out_dir/checkpoint.h5`` (written every ``checkpoint_every`` cycles).
+    cache: stage cache for the multibody stage of a coupled scene.
     """
+    times = {}
+    multibody = None
+    if "coupling" in scene.data:
+        from pipelines.build import multibody_loading
+
+        clock = time.perf_counter()
+        multibody = multibody_loading(scene, cache)
+        times["multibody_s"] = time.perf_counter() - clock
     clock = time.perf_counter()
-    model = build(scene)
-    build_time = time.perf_counter() - clock
+    model = build(scene, cache=cache, multibody=multibody)
+    times["build_and_condense_s"] = time.perf_counter() - clock
     outcome = run_model(model, Path(out_dir), progress=progress, plots=plots, resume=resume)
-    outcome.stage_times = {"build_and_condense_s": build_time, **outcome.stage_times}
+    outcome.stage_times = {**times, **outcome.stage_times}
     outcome.summary["wall_time_s"] = sum(outcome.stage_times.values())
     return outcome

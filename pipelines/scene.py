@@ -16,13 +16,22 @@ from pathlib import Path
 
 from reduction.errors import InputError
 
-KNOWN_EFFECTS = ("cof_evolution", "wear", "bolts")
+CONTACT_EFFECTS = ("cof_evolution", "wear", "bolts")
+# effects of the multibody-driven loading, valid with a [coupling] table: the CW's modal
+# (flexible) inertia, the spin's centrifugal part, and the multibody model's own effects
+COUPLING_EFFECTS = ("flexible_counterweight", "centrifugal")
+MULTIBODY_EFFECTS = ("gas_torque", "gear_mesh", "torsional_vibration", "flexible_crankshaft")
+KNOWN_EFFECTS = CONTACT_EFFECTS + COUPLING_EFFECTS + MULTIBODY_EFFECTS
 MESH_GENERATORS = {
     "cylinder_block": ("radius", "half_width", "height", "contact_half_width", "contact_size"),
     "plane_block": ("half_width", "depth", "contact_half_width", "contact_size"),
     "flat_block": ("size_x", "size_y", "height", "n_x", "n_y", "n_z"),
     "beam_with_hole": ("length", "width", "thickness", "hole_x", "hole_radius", "contact_size",
                        "pad_half_length"),
+    "counterweight_block": ("width", "height", "thickness", "hub_width", "hub_height", "screw_x",
+                            "hole_half_size", "contact_size"),
+    "web_block": ("width", "depth", "thickness", "hub_width", "screw_x", "hole_half_size", "hole_depth",
+                  "contact_size"),
 }
 
 
@@ -87,6 +96,15 @@ SCHEMA = {
                       "must be 'pressure' or 'shear'", "Archard driver"),
         "search_distance": (NUMBER, False, _positive, "largest slave-master distance, mm"),
     },
+    "coupling": {
+        "body": (str, True, None, "the contact body that is the counterweight"),
+        "counterweight": (int, False, _integer_at_least(1), "which CW of the multibody model (1 = first)"),
+        "cycle": (str, False, lambda v: None if v in ("wing_period", "revolution") else
+                  "must be 'wing_period' or 'revolution'", "what one contact load cycle is"),
+        "wing_amplitude": (NUMBER, False, _positive, "wing vibration amplitude, mm (default: from the multibody run)"),
+        "fields": (str, False, lambda v: None if v in ("all", "wing_mode") else "must be 'all' or 'wing_mode'",
+                   "which inertia fields load the CW"),
+    },
     "procedure": {
         "preload_increments": (int, False, _integer_at_least(1), "increments of the preload"),
         "increments_per_cycle": (int, False, _integer_at_least(2), "increments per load cycle"),
@@ -122,7 +140,7 @@ BODY_LOAD_KEYS = {
                 "must be 'ramp', 'cyclic' or 'constant'", "time shape"),
 }
 TOP_LEVEL = ("scene", "materials", "bodies", "bolts", "contact", "loads", "motions", "body_loads",
-             "procedure", "mbs")
+             "procedure", "mbs", "coupling")
 OPTIONAL_TABLES = ("bolts",)
 
 
@@ -276,14 +294,31 @@ def _check_patterns(data, problems):
         needed = "acceleration" if entry.get("kind") == "gravity" else "angular_velocity"
         if entry.get("kind") in ("gravity", "centrifugal") and needed not in entry:
             problems.append(f"'body_loads[{k}].{needed}' is missing for a {entry['kind']} load")
-    if not names:
-        problems.append("the scene has no [[loads]] or [[motions]]")
+    if not names and "coupling" not in data:
+        problems.append("the scene has no [[loads]], [[motions]] or [coupling]")
 
 
 def _check_effects(data, problems):
     for effect in data["scene"]["effects"]:
         if effect not in KNOWN_EFFECTS:
             problems.append(f"unknown effect '{effect}' in 'scene.effects'{_suggest(str(effect), KNOWN_EFFECTS)}")
+        elif effect not in CONTACT_EFFECTS and "coupling" not in data:
+            problems.append(f"effect '{effect}' in 'scene.effects' acts through the multibody model and "
+                            "needs a [coupling] table")
+    if "coupling" in data:
+        coupling = data["coupling"]
+        body = data.get("bodies", {}).get(coupling.get("body"))
+        if body is None:
+            problems.append(f"'coupling.body' must name one of the bodies ({', '.join(data.get('bodies', {}))})")
+        elif "density" not in data.get("materials", {}).get(body.get("material"), {}):
+            problems.append(f"'coupling.body' is '{coupling['body']}', whose material has no density "
+                            "(the coupling loads it with its inertia)")
+        if data["scene"]["dimension"] != 3:
+            problems.append("a scene with [coupling] must be 3D ('scene.dimension' = 3)")
+        mbs_effects = data.get("mbs", {}).get("effects") if isinstance(data.get("mbs"), dict) else None
+        if mbs_effects is not None:
+            problems.append("'mbs.effects' is set by 'scene.effects' in a coupled scene: list the multibody "
+                            f"effects {MULTIBODY_EFFECTS} there")
 
 
 def _check_bodies(data, problems):

@@ -1,0 +1,138 @@
+"""The main job, end to end on the shipped default counterweight scene (``make demo``).
+
+1. multibody: reduce the CW (Craig–Bampton) and simulate the crank throw at the scene's speed;
+2. contact model: mesh, assemble and condense the CW–web joint with its inertia patterns;
+3. COF and wear phases of the scene at its wing amplitude (normal operation): the verdict;
+4. amplitude limit: the largest wing amplitude that still ends stuck (coarse tolerance);
+5. speed sweep of the multibody model and the fretting safety margin at every speed.
+
+The demo runs at a coarser setting than the shipped scene (``DEMO_OVERRIDES``: 10 mm contact
+elements, shorter COF phase) so that it finishes in a few minutes on a 2-core machine; stages
+whose inputs are unchanged are read from the stage cache on a second run.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+DEFAULT_SCENE = EXAMPLES / "counterweight.toml"
+DEMO_OVERRIDES = {
+    "bodies.counterweight.mesh.contact_size": 10.0,
+    "bodies.web.mesh.contact_size": 10.0,
+    "procedure.cof_cycles": 60,
+    "procedure.wear_cycles": 20,
+    "procedure.cycle_jump": 65.0,
+}
+DEMO_SPEEDS_RPM = np.arange(600.0, 901.0, 50.0)
+DEMO_AMPLITUDE_RANGE_MM = (0.1, 0.4)
+DEMO_TOLERANCE_MM = 0.025
+
+
+@dataclass
+class DemoResult:
+    summary: dict
+    stage_times: dict = field(default_factory=dict)
+    files: dict = field(default_factory=dict)
+
+
+def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DEMO_SPEEDS_RPM,
+             amplitude_range_mm=DEMO_AMPLITUDE_RANGE_MM, tolerance_mm=DEMO_TOLERANCE_MM, cache_dir=None,
+             workers=None, progress=True) -> DemoResult:
+    """Run the five stages (module doc) into ``out_dir``; returns the summary and stage times (s)."""
+    from pipelines import scene as scenes
+    from pipelines.build import build, multibody_loading
+    from pipelines.limit import find_limit, plot_limit, write_limit
+    from pipelines.margins import MarginResult, calibration_factor, plot_margins, write_margins
+    from pipelines.run import run_model
+    from pipelines.stages import StageCache
+
+    out_dir = Path(out_dir)
+    overrides = dict(DEMO_OVERRIDES if overrides is None else overrides)
+    scene = scenes.load(scene_path, overrides)
+    cache = StageCache(cache_dir)
+    times = {}
+
+    clock = time.perf_counter()
+    loading = multibody_loading(scene, cache)
+    times["multibody_s"] = time.perf_counter() - clock
+    clock = time.perf_counter()
+    model = build(scene, cache=cache, multibody=loading)
+    times["contact_model_s"] = time.perf_counter() - clock
+    outcome = run_model(model, out_dir / "operating", progress=progress)
+    for name in ("contact_space_s", "cof_phase_s", "wear_phase_s"):
+        if name in outcome.stage_times:
+            times[name] = outcome.stage_times[name]
+    times["contact_outputs_s"] = outcome.stage_times.get("outputs_s", 0.0)
+
+    clock = time.perf_counter()
+    limit = find_limit(scene_path, *amplitude_range_mm, tolerance_mm=tolerance_mm,
+                       overrides=dict(overrides, **{"mbs.speed_rpm": float(max(speeds_rpm))}),
+                       cache_dir=cache_dir, out_dir=out_dir / "limit", workers=workers, progress=progress)
+    times["amplitude_limit_s"] = time.perf_counter() - clock
+    limit_plot = plot_limit(limit, out_dir / "limit" / "limit.png", scene.name)
+    write_limit(limit, out_dir / "limit" / "limit.json")
+
+    clock = time.perf_counter()
+    from mbs.sweep import speed_sweep
+    from pipelines.build import multibody_params
+
+    sweep_path = out_dir / "sweep.h5"
+    sweep = speed_sweep(multibody_params(scene), speeds_rpm, path=sweep_path, progress=progress, workers=workers)
+    counterweight = scene.data["coupling"].get("counterweight", 1) - 1
+    factor = calibration_factor(scene, cache)
+    amplitude = factor * sweep.wing_amplitude[:, counterweight]
+    margin = (np.full_like(amplitude, np.nan) if limit.limit_mm is None
+              else limit.limit_mm / np.where(amplitude > 0, amplitude, np.nan))
+    margins = MarginResult(np.asarray(speeds_rpm, float), amplitude, factor, limit, margin, float(max(speeds_rpm)))
+    write_margins(sweep_path, margins)
+    margin_plot = plot_margins(margins, out_dir / "margins.png", f"{scene.name}: fretting safety margin")
+    times["speed_sweep_s"] = time.perf_counter() - clock
+
+    s = outcome.summary
+    operating_margin = None if limit.limit_mm is None else limit.limit_mm / s["wing_amplitude_mm"]
+    summary = {
+        "scene": scene.name,
+        "engine_speed_rpm": s["engine_speed_rpm"],
+        "wing_amplitude_um": 1e3 * s["wing_amplitude_mm"],
+        "verdict": s["verdict"],
+        "cof_evolved_area_fraction": s["cof_evolved_area_fraction"],
+        "bolt_force_initial_N": s.get("bolt_force_initial_N"),
+        "bolt_force_final_N": s.get("bolt_force_final_N"),
+        "clamp_force_loss_fraction": s.get("clamp_force_loss_fraction"),
+        "amplitude_limit_um": None if limit.limit_mm is None else 1e3 * limit.limit_mm,
+        "margin_at_operating_point": operating_margin,
+        **{k: v for k, v in margins.to_json().items() if k in ("smallest_margin", "smallest_margin_speed_rpm")},
+        "wall_time_s": sum(times.values()),
+    }
+    files = {"results": str(outcome.results_path), "plots": str(out_dir / "operating" / "plots"),
+             "limit_plot": str(limit_plot), "margins_plot": str(margin_plot), "sweep": str(sweep_path)}
+    (out_dir / "summary.json").write_text(json.dumps({"summary": summary, "stage_times_s": times, "files": files},
+                                                     indent=2, default=float))
+    return DemoResult(summary, times, files)
+
+
+def describe(result: DemoResult) -> str:
+    """A short human-readable account of the demo."""
+    s, t = result.summary, result.stage_times
+    lines = [f"fretwork demo: {s['scene']} at {s['engine_speed_rpm']:.0f} rpm, wing amplitude {s['wing_amplitude_um']:.0f} µm",
+             f"  verdict: {s['verdict'].upper()} (COF evolved over {s['cof_evolved_area_fraction']:.0%} of the contact)"]
+    if s["bolt_force_initial_N"] is not None:
+        lines.append(f"  clamp force {s['bolt_force_initial_N'] / 1e3:.0f} kN -> {s['bolt_force_final_N'] / 1e3:.0f} kN "
+                     f"({100 * s['clamp_force_loss_fraction']:+.2f} % loss)")
+    if s["amplitude_limit_um"] is None:
+        lines.append("  amplitude limit: below the searched range")
+    else:
+        lines.append(f"  amplitude limit {s['amplitude_limit_um']:.0f} µm: margin {s['margin_at_operating_point']:.2f} "
+                     f"at the operating point, smallest {s['smallest_margin']:.2f} at "
+                     f"{s['smallest_margin_speed_rpm']:.0f} rpm")
+    lines.append("  time: " + ", ".join(f"{k.removesuffix('_s').replace('_', ' ')} {v:.1f} s" for k, v in t.items())
+                 + f" (total {s['wall_time_s']:.0f} s)")
+    for name, path in result.files.items():
+        lines.append(f"  {name}: {path}")
+    return "\n".join(lines)

@@ -1,0 +1,213 @@
+"""Amplitude limit of a coupled scene: the largest wing amplitude whose verdict is still ``stick``.
+
+Each amplitude is one complete contact run (preload, COF phase, wear phase) of the scene with
+its wing vibration scaled (:func:`pipelines.build.coupled_program`; nothing is re-condensed).
+A run in which the joint cannot carry the load at all (tangential equilibrium lost: the CW
+slides off) counts as ``loosening``. The search assumes that a larger amplitude never gives a
+safer verdict. It evaluates the ends of the range first, then narrows the bracket
+[largest stuck amplitude, smallest amplitude that is not stuck] in rounds of as many
+amplitudes as there are workers (one worker: bisection), until the bracket is no wider than
+the tolerance. The limit reported is the bracket's lower end: an amplitude that was run and
+found stuck. Runs are independent cases (:func:`pipelines.distributed.map_cases`) and each
+is cached (stage ``contact_run``), so a repeated or extended search only runs new amplitudes.
+
+Amplitudes in mm internally; the command line takes µm, as engineers quote wing amplitudes.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from reduction.errors import InputError
+
+SAFE = "stick"
+FIGURES = ("clamp_force_loss_fraction", "damaged_area_fraction", "slip_area_fraction", "cof_evolved_area_fraction",
+           "worn_area_fraction", "max_wear_depth_mm", "bolt_force_initial_N", "bolt_force_final_N",
+           "min_stick_margin", "cycles_run", "equivalent_cycles")
+
+
+@dataclass(frozen=True)
+class AmplitudeRun:
+    """One contact run: wing amplitude (mm), its verdict, the figures of its summary, or an error."""
+
+    amplitude_mm: float
+    verdict: str | None
+    figures: dict
+    error: str | None = None
+
+    @property
+    def safe(self) -> bool:
+        return self.verdict == SAFE
+
+
+@dataclass
+class LimitResult:
+    """limit_mm: largest amplitude found stuck (None if even the lowest was not); bracket_mm:
+    (stuck, not stuck) amplitudes around the limit (None where the range did not bracket it)."""
+
+    limit_mm: float | None
+    bracket_mm: tuple
+    tolerance_mm: float
+    runs: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        runs = sorted(self.runs, key=lambda r: r.amplitude_mm)
+        return {
+            "limit_um": None if self.limit_mm is None else 1e3 * self.limit_mm,
+            "limit_mm": self.limit_mm,
+            "bracket_um": [None if a is None else 1e3 * a for a in self.bracket_mm],
+            "tolerance_um": 1e3 * self.tolerance_mm,
+            "runs": [{"amplitude_um": 1e3 * r.amplitude_mm, "verdict": r.verdict, "error": r.error,
+                      **{k: r.figures.get(k) for k in FIGURES}} for r in runs],
+        }
+
+
+def parse_range_um(text: str) -> tuple[float, float]:
+    """'100:400' (µm) → (0.1, 0.4) mm."""
+    try:
+        low, high = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise InputError(f"--amplitude {text!r}: use LOW:HIGH in µm, e.g. 100:400") from None
+    if not 0 < low < high:
+        raise InputError(f"--amplitude {text!r}: needs 0 < LOW < HIGH (µm)")
+    return 1e-3 * low, 1e-3 * high
+
+
+def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_dir: str | None,
+                  out_dir: str | None = None) -> AmplitudeRun:
+    """One contact run of the scene at a wing amplitude (mm); a case of the limit search."""
+    from contact.solver import ConvergenceError
+    from pipelines import scene as scenes
+    from pipelines.build import build, coupled_program
+    from pipelines.run import run_model
+    from pipelines.stages import StageCache
+
+    scene = scenes.load(scene_path, overrides or None)
+    if "coupling" not in scene.data:
+        raise InputError(f"{scene_path}: the amplitude limit needs a coupled scene (a [coupling] table)")
+    cache = StageCache(cache_dir)
+
+    def compute() -> AmplitudeRun:
+        model = coupled_program(build(scene, cache=cache), amplitude_mm)
+        folder = Path(out_dir) / f"amplitude_{1e3 * amplitude_mm:07.2f}um" if out_dir else None
+        try:
+            if folder is None:
+                import tempfile
+
+                with tempfile.TemporaryDirectory() as temporary:
+                    outcome = run_model(model, Path(temporary), progress=False, plots=False)
+            else:
+                outcome = run_model(model, folder, progress=False, plots=False)
+        except ConvergenceError as error:
+            if "tangential equilibrium is lost" in str(error):
+                return AmplitudeRun(amplitude_mm, "loosening", {"gross_sliding": True})
+            return AmplitudeRun(amplitude_mm, None, {}, f"ConvergenceError: {error}")
+        summary = {k: v for k, v in outcome.summary.items() if isinstance(v, (int, float, str, type(None)))}
+        return AmplitudeRun(amplitude_mm, outcome.summary["verdict"], summary)
+
+    inputs = {"scene": scene.data, "amplitude_mm": round(float(amplitude_mm), 9)}
+    return cache.get("contact_run", inputs, compute)
+
+
+def find_limit(scene_path, low_mm: float, high_mm: float, *, tolerance_mm: float = 0.01,
+               overrides: dict | None = None, cache_dir=None, out_dir=None, scheduler: str | None = None,
+               workers: int | None = None, progress: bool = True) -> LimitResult:
+    """Bracket and narrow the stick limit of the wing amplitude on [low_mm, high_mm] (module doc)."""
+    from pipelines.distributed import cluster, map_cases
+
+    if not 0 < low_mm < high_mm:
+        raise InputError("amplitude range needs 0 < low < high")
+    if tolerance_mm <= 0:
+        raise InputError("the limit tolerance must be positive")
+    parallel = max(1, workers if workers else (_default_workers() if scheduler is None else 2))
+    if workers == 0:
+        return _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out_dir,
+                       {"scheduler": None, "workers": 0}, 1, progress, map_cases)
+    with cluster(scheduler, workers) as where:
+        return _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out_dir, where,
+                       parallel, progress, map_cases)
+
+
+def _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out_dir, where, parallel,
+            progress, map_cases) -> LimitResult:
+    runs: dict[float, AmplitudeRun] = {}
+
+    def evaluate(amplitudes, label):
+        cases = [(float(a), {"scene_path": str(scene_path), "overrides": overrides or {}, "amplitude_mm": float(a),
+                             "cache_dir": None if cache_dir is None else str(cache_dir),
+                             "out_dir": None if out_dir is None else str(out_dir)}) for a in amplitudes]
+        for outcome in map_cases(run_amplitude, cases, label=label, progress=progress, **where):
+            runs[outcome.key] = outcome.value if outcome.error is None else \
+                AmplitudeRun(outcome.key, None, {}, outcome.error)
+        failed = [runs[a] for a in amplitudes if runs[a].verdict is None]
+        if failed:
+            raise InputError("the limit search cannot continue: the run at "
+                             + "; ".join(f"{1e3 * r.amplitude_mm:.1f} µm failed ({r.error})" for r in failed))
+
+    evaluate([low_mm, high_mm], "limit: range ends")
+    if not runs[low_mm].safe:
+        return LimitResult(None, (None, low_mm), tolerance_mm, list(runs.values()))
+    if runs[high_mm].safe:
+        return LimitResult(high_mm, (high_mm, None), tolerance_mm, list(runs.values()))
+    lower, upper = low_mm, high_mm
+    round_number = 0
+    while upper - lower > tolerance_mm:
+        round_number += 1
+        points = lower + (upper - lower) * np.arange(1, parallel + 1) / (parallel + 1)
+        evaluate(list(points), f"limit: round {round_number}")
+        safe = [a for a in points if runs[a].safe]
+        unsafe = [a for a in points if not runs[a].safe]
+        lower = max(safe, default=lower)
+        upper = min([a for a in unsafe if a > lower], default=upper)
+    return LimitResult(lower, (lower, upper), tolerance_mm, list(runs.values()))
+
+
+def _default_workers() -> int:
+    import os
+
+    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+
+
+def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
+    """Clamp-force loss and damaged area versus wing amplitude, verdicts marked, limit drawn."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    runs = sorted((r for r in result.runs if r.verdict is not None), key=lambda r: r.amplitude_mm)
+    amplitude = np.array([1e3 * r.amplitude_mm for r in runs])
+    loss = np.array([100 * (r.figures.get("clamp_force_loss_fraction") or 0.0) for r in runs])
+    damaged = np.array([100 * (r.figures.get("damaged_area_fraction") or 0.0) for r in runs])
+    colours = {"stick": "tab:green", "damage": "tab:orange", "loosening": "tab:red"}
+    figure, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    for ax, values, label in ((axes[0], loss, "clamp-force loss (%)"), (axes[1], damaged, "damaged area (%)")):
+        ax.plot(amplitude, values, color="0.6", zorder=1)
+        for verdict, colour in colours.items():
+            mask = np.array([r.verdict == verdict for r in runs])
+            if mask.any():
+                ax.scatter(amplitude[mask], values[mask], color=colour, label=verdict, zorder=2)
+        if result.limit_mm is not None:
+            ax.axvline(1e3 * result.limit_mm, color="k", linestyle="--", linewidth=1)
+        ax.set_ylabel(label)
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(loc="upper left")
+    limit = "not bracketed" if result.limit_mm is None or result.bracket_mm[1] is None else \
+        f"limit {1e3 * result.limit_mm:.0f} µm (next run {1e3 * result.bracket_mm[1]:.0f} µm not stuck)"
+    axes[0].set_title(f"{title}: {limit}")
+    axes[1].set_xlabel("wing amplitude (µm)")
+    figure.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path
+
+
+def write_limit(result: LimitResult, path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(result.to_json(), indent=2))
+    return path

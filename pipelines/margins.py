@@ -1,0 +1,140 @@
+"""Fretting safety margins across the operating range: speed sweep → wing amplitude → margin.
+
+For each engine speed the multibody model gives the wing amplitude (half the peak-to-peak wing
+torsion of the scene's counterweight); the margin is amplitude limit / wing amplitude, where
+the limit comes from :func:`pipelines.limit.find_limit` on the coupled scene. A margin below
+1 means the joint does not stay stuck at that speed.
+
+Calibration: when the scene states its wing amplitude (``coupling.wing_amplitude``, e.g. a
+measured one at the scene's engine speed), every sweep amplitude is scaled by the same factor
+(stated amplitude / multibody amplitude at that speed): the excitation of the linear
+multibody model is calibrated once, at one speed, as the paper's model was calibrated
+against acceleration measurements.
+
+The limit is searched at the highest sweep speed: the centrifugal load, which lowers the
+clamp force, is then largest, so the one limit is conservative for every speed of the sweep.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from pipelines.limit import LimitResult, find_limit
+from reduction.errors import InputError
+
+
+@dataclass
+class MarginResult:
+    """speeds_rpm (n,); wing_amplitude_mm (n,) after calibration; calibration: the factor on the
+    multibody amplitudes; limit: the amplitude limit; margin (n,) = limit / amplitude."""
+
+    speeds_rpm: np.ndarray
+    wing_amplitude_mm: np.ndarray
+    calibration: float
+    limit: LimitResult
+    margin: np.ndarray
+    limit_speed_rpm: float
+
+    def to_json(self) -> dict:
+        return {
+            "speeds_rpm": self.speeds_rpm.tolist(),
+            "wing_amplitude_um": (1e3 * self.wing_amplitude_mm).tolist(),
+            "calibration_factor": self.calibration,
+            "limit_um": None if self.limit.limit_mm is None else 1e3 * self.limit.limit_mm,
+            "limit_speed_rpm": self.limit_speed_rpm,
+            "margin": [None if not np.isfinite(m) else float(m) for m in self.margin],
+            "smallest_margin": None if not np.isfinite(self.margin).any() else float(np.nanmin(self.margin)),
+            "smallest_margin_speed_rpm": None if not np.isfinite(self.margin).any()
+            else float(self.speeds_rpm[int(np.nanargmin(self.margin))]),
+        }
+
+
+def calibration_factor(scene, cache) -> float:
+    """Stated wing amplitude / multibody wing amplitude at the scene's speed (1 if none is stated)."""
+    from pipelines.build import multibody_loading
+
+    stated = scene.data["coupling"].get("wing_amplitude")
+    if stated is None:
+        return 1.0
+    modelled = multibody_loading(scene, cache).wing_amplitude
+    if modelled <= 0:
+        raise InputError("the multibody run shows no wing vibration at the scene's speed: cannot calibrate")
+    return float(stated) / modelled
+
+
+def margin_sweep(scene_path, speeds, *, amplitude_range_mm, tolerance_mm, cache_dir=None, sweep_path=None,
+                 out_dir=None, scheduler=None, workers=None, progress=True, overrides=None):
+    """Speed sweep, amplitude limit and margins (module doc); returns (MarginResult, SweepResult)."""
+    from mbs.sweep import speed_sweep
+    from pipelines import scene as scenes
+    from pipelines.build import multibody_params
+    from pipelines.stages import StageCache
+
+    scene = scenes.load(scene_path, overrides or None)
+    if "coupling" not in scene.data:
+        raise InputError(f"{scene_path}: --margins needs a coupled scene (a [coupling] table) for the limit")
+    cache = StageCache(cache_dir)
+    speeds = np.asarray(speeds, dtype=float)
+    sweep = speed_sweep(multibody_params(scene), speeds, path=sweep_path, progress=progress,
+                        scheduler=scheduler, workers=workers)
+    counterweight = scene.data["coupling"].get("counterweight", 1) - 1
+    factor = calibration_factor(scene, cache)
+    amplitude = factor * sweep.wing_amplitude[:, counterweight]
+    top_speed = float(speeds.max())
+    limit_overrides = dict(overrides or {}, **{"mbs.speed_rpm": top_speed})
+    limit = find_limit(scene_path, *amplitude_range_mm, tolerance_mm=tolerance_mm, overrides=limit_overrides,
+                       cache_dir=cache_dir, out_dir=out_dir, scheduler=scheduler, workers=workers, progress=progress)
+    margin = (np.full_like(amplitude, np.nan) if limit.limit_mm is None
+              else np.divide(limit.limit_mm, amplitude, out=np.full_like(amplitude, np.inf), where=amplitude > 0))
+    result = MarginResult(speeds, amplitude, factor, limit, margin, top_speed)
+    if sweep_path is not None:
+        write_margins(sweep_path, result)
+    return result, sweep
+
+
+def write_margins(path, result: MarginResult) -> None:
+    """Group /margins of the sweep file (units as attributes)."""
+    with h5py.File(path, "a") as handle:
+        if "margins" in handle:
+            del handle["margins"]
+        group = handle.create_group("margins")
+        group.attrs["description"] = "fretting safety margin = amplitude limit / wing amplitude per engine speed"
+        group.attrs["calibration_factor"] = result.calibration
+        group.attrs["limit_speed_rpm"] = result.limit_speed_rpm
+        for name, data, units in (("speed_rpm", result.speeds_rpm, "rpm"),
+                                  ("wing_amplitude", result.wing_amplitude_mm, "mm"),
+                                  ("margin", result.margin, "1")):
+            group.create_dataset(name, data=data).attrs["units"] = units
+        group.attrs["limit_mm"] = np.nan if result.limit.limit_mm is None else result.limit.limit_mm
+
+
+def plot_margins(result: MarginResult, path: Path, title: str) -> Path:
+    """Wing amplitude and limit versus speed (top), margin versus speed (bottom)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    top.plot(result.speeds_rpm, 1e3 * result.wing_amplitude_mm, "o-", label="wing amplitude")
+    if result.limit.limit_mm is not None:
+        top.axhline(1e3 * result.limit.limit_mm, color="tab:red", linestyle="--",
+                    label=f"stick limit {1e3 * result.limit.limit_mm:.0f} µm")
+    top.set_ylabel("wing amplitude (µm)")
+    top.legend()
+    top.grid(True, alpha=0.3)
+    bottom.plot(result.speeds_rpm, result.margin, "o-", color="tab:green")
+    bottom.axhline(1.0, color="tab:red", linewidth=1)
+    bottom.set_ylabel("safety margin (limit / amplitude)")
+    bottom.set_xlabel("engine speed (rpm)")
+    bottom.grid(True, alpha=0.3)
+    top.set_title(title)
+    figure.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path
