@@ -8,7 +8,7 @@ four-stroke cycle):
 * default: 750 rpm, 6 CB modes per CW, rigid CW joint, time step 5e-5 s (mbs/NOTES.md);
 * 20 modes, rigid joint, 975 rpm: what the extra modes and the speed cost;
 * hard case (tests/stability/test_multibody_hard_case.py): 975 rpm, 20 modes, the shipped bolted
-  joint as a stiff spring (mbs.joint.scene_joint_stiffness), at 5e-5 s, 2.5e-5 s and 1.25e-5 s.
+  joint as a stiff spring (mbs.joint.generic_joint_stiffness), at 5e-5 s, 2.5e-5 s and 1.25e-5 s.
 
 Per row: real-time factor (simulated s per solver wall s; and per CPU s of the whole run, the
 better measure on a shared machine), CPU time of the whole run, Newton
@@ -31,13 +31,12 @@ import numpy as np
 import pytest
 
 from mbs.counterweight import reduce_counterweight
-from mbs.joint import scene_joint_stiffness
+from mbs.joint import generic_joint_stiffness
 from mbs.model import simulate, wing_torsion_decay_components
 from mbs.parameters import CrankThrowParams, ModelParams, SolverParams
 from mbs.spectra import peak_frequency
 
 ROOT = Path(__file__).resolve().parents[2]
-SCENE = ROOT / "examples" / "counterweight.toml"
 REVOLUTIONS = 4.0
 DECAY_REVOLUTIONS = 2.0
 DOCUMENTED_STEP = SolverParams().time_step
@@ -48,7 +47,7 @@ COLUMNS = ("case", "rpm", "modes", "top_mode_hz", "omega_top_dt", "time_step_s",
 
 
 def _cases() -> list[tuple[str, ModelParams]]:
-    stiff = replace(CrankThrowParams(), joint_stiffness=scene_joint_stiffness(SCENE))
+    stiff = replace(CrankThrowParams(), joint_stiffness=generic_joint_stiffness())
     run = SolverParams(revolutions=REVOLUTIONS)
     return [
         ("default", ModelParams(solver=run)),
