@@ -125,7 +125,7 @@ def collect_histories(mbs, sensors, reduced: ReducedCounterweight, energy: bool,
             for key in ("q", "q_t", "q_tt", "rotation", "acceleration", "omega", "alpha", "velocity",
                         "joint_displacement", "joint_rotation", "joint_force", "joint_moment")}
     rotation = data["rotation"].reshape(n_cw, -1, 3, 3)
-    to_local = lambda vectors: np.einsum("csji,csj->csi", rotation, vectors)  # noqa: E731 (A^T v per sample)
+    to_local = lambda vectors: np.einsum("csji,csj->csi", rotation, vectors)  # A^T v per sample
     tip_shapes = reduced.wing_tip_axial_shapes()
     energy_time = total_energy = None
     if energy:
