@@ -1,15 +1,16 @@
 """Benchmark: parallel efficiency of independent cases on the embedded LocalCluster (`make bench`).
 
-Two 16-case studies, each run in this process without dask (workers=0), on a LocalCluster with
-one worker and with two (this machine has two cores): a 16-amplitude contact study (the
+Two 16-case studies, each run in this process without dask (workers=0) and on a LocalCluster
+with one worker and with two (this machine has two cores): a 16-amplitude contact study (the
 cylinder on plane, tangential amplitude 0.02-0.14 mm, contact mesh 0.025 mm, 20 wear cycles,
 about 5 s a case) and a 16-speed multibody sweep (4 CB modes, 1.5 revolutions). Speed-up is
-the wall time on one worker over the wall time on two; efficiency is the speed-up over 2. The
-results of every run must equal the in-process ones (contact figures to 1e-9: the contact
-solver's last digits differ between two runs of a case even in one process). A third comparison times the sweep with
-the counterweight reduced once on the client and sent to the workers (what speed_sweep does)
-against reducing it in every case. Prints a table with the load average, which on a shared
-machine says how much of the two cores the study really had.
+the wall time on one worker over the wall time on two; efficiency is the speed-up over 2. One
+and two workers alternate, best of FRETWORK_BENCH_TRIALS (2) runs each. The results of every
+run must equal the in-process ones (contact figures to 1e-9: the contact solver's last digits
+differ between two runs of a case even in one process). A third comparison times the sweep
+with the counterweight reduced once on the client and sent to the workers (what speed_sweep
+does) against reducing it in every case. Prints a table with the load average, which on a
+shared machine says how much of the two cores the study really had.
 """
 
 import os
@@ -30,18 +31,21 @@ ROOT = Path(__file__).resolve().parents[2]
 CYLINDER = ROOT / "examples" / "cylinder_on_plane.toml"
 AMPLITUDES_MM = np.linspace(0.02, 0.14, 16)
 SPEEDS_RPM = np.linspace(600.0, 750.0, 16)
+TRIALS = int(os.environ.get("FRETWORK_BENCH_TRIALS", "2"))
 SWEEP_PARAMS = ModelParams(n_modes=4, effects=frozenset({"gear_mesh"}),
                            solver=SolverParams(revolutions=1.5, time_step=5e-5))
 
 
 def contact_case(amplitude_mm: float) -> dict:
-    """The cylinder on plane at one tangential amplitude (mm): wear depth (mm), slip area, verdict."""
+    """The cylinder on plane at one tangential amplitude (mm): wear depth (mm), slip area, verdict,
+    and the case's own wall time (s)."""
     from contact import procedure
     from contact.solver import ContactSolver
     from contact.structure import ContactSpace
     from pipelines import scene as scenes
     from pipelines.build import build
 
+    clock = time.perf_counter()
     scene = scenes.load(CYLINDER, {
         "motions": [{"name": "tangential", "dof": "cylinder.rp.ux", "value": float(amplitude_mm),
                      "history": "cyclic"}],
@@ -52,7 +56,8 @@ def contact_case(amplitude_mm: float) -> dict:
     result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
                            cof_evolution=False, wear=True)
     return {"max_wear_depth_mm": result.figures["max_wear_depth_mm"],
-            "slip_area_fraction": result.figures["slip_area_fraction"], "verdict": result.verdict}
+            "slip_area_fraction": result.figures["slip_area_fraction"], "verdict": result.verdict,
+            "wall_s": time.perf_counter() - clock}
 
 
 def speed_case_reducing(params: ModelParams) -> object:
@@ -75,31 +80,40 @@ def _sweep_arrays(result):
     return [result.wing_amplitude, result.dominant_frequencies, result.system_frequencies]
 
 
+def _check_contact(outcomes, reference):
+    assert all(o.ok for o in outcomes), [o.error for o in outcomes if not o.ok]
+    for ours, theirs in zip(outcomes, reference):  # the contact solver differs in the last digits run to run
+        assert ours.value["verdict"] == theirs["verdict"]
+        for name in ("max_wear_depth_mm", "slip_area_fraction"):
+            assert ours.value[name] == pytest.approx(theirs[name], rel=1e-9), (ours.key, name)
+
+
+def _check_sweep(result, serial):
+    assert not result.failures
+    for ours, theirs in zip(_sweep_arrays(result), serial):
+        np.testing.assert_array_equal(ours, theirs)
+
+
 @pytest.mark.bench
 def test_parallel_efficiency_of_sixteen_independent_cases():
-    rows, load_before = [], os.getloadavg()[0]
+    load_before = os.getloadavg()[0]
     cases = [(float(a), {"amplitude_mm": float(a)}) for a in AMPLITUDES_MM]
-    contact = {}
-    for workers in (0, 1, 2):
-        outcomes, contact[workers] = _timed(lambda: map_cases(contact_case, cases, workers=workers, progress=False))
-        assert all(o.ok for o in outcomes), [o.error for o in outcomes if not o.ok]
-        if workers == 0:
-            reference = [o.value for o in outcomes]
-        for ours, theirs in zip(outcomes, reference):  # the contact solver differs in the last digits run to run
-            assert ours.value["verdict"] == theirs["verdict"]
-            for name in ("max_wear_depth_mm", "slip_area_fraction"):
-                assert ours.value[name] == pytest.approx(theirs[name], rel=1e-9), (ours.key, name)
-    rows.append(("contact, 16 amplitudes", contact))
-
-    sweep = {}
-    for workers in (0, 1, 2):
-        result, sweep[workers] = _timed(lambda: speed_sweep(SWEEP_PARAMS, SPEEDS_RPM, workers=workers))
-        assert not result.failures
-        if workers == 0:
-            serial = _sweep_arrays(result)
-        for ours, theirs in zip(_sweep_arrays(result), serial):
-            np.testing.assert_array_equal(ours, theirs)
-    rows.append(("mbs sweep, 16 speeds", sweep))
+    serial, serial_s = _timed(lambda: map_cases(contact_case, cases, workers=0, progress=False))
+    reference = [o.value for o in serial]
+    sweep_serial, sweep_serial_s = _timed(lambda: speed_sweep(SWEEP_PARAMS, SPEEDS_RPM, workers=0))
+    contact, sweep, busy = {0: serial_s}, {0: sweep_serial_s}, {}
+    # 1 and 2 workers alternate and the faster of TRIALS runs counts: the neighbours' load on a
+    # shared machine changes within minutes, and it only ever slows a run down.
+    for _ in range(TRIALS):
+        for workers in (1, 2):
+            outcomes, wall = _timed(lambda: map_cases(contact_case, cases, workers=workers, progress=False))
+            _check_contact(outcomes, reference)
+            if wall < contact.get(workers, np.inf):
+                contact[workers] = wall
+                busy[workers] = sum(o.value["wall_s"] for o in outcomes) / (workers * wall)
+            result, wall = _timed(lambda: speed_sweep(SWEEP_PARAMS, SPEEDS_RPM, workers=workers))
+            _check_sweep(result, _sweep_arrays(sweep_serial))
+            sweep[workers] = min(wall, sweep.get(workers, np.inf))
 
     speed_cases = [(s, {"params": replace(SWEEP_PARAMS, speed_rpm=float(s))}) for s in SPEEDS_RPM]
     _, per_case = _timed(lambda: map_cases(speed_case_reducing, speed_cases, workers=2, progress=False))
@@ -110,11 +124,14 @@ def test_parallel_efficiency_of_sixteen_independent_cases():
 
     lines = [f"{'study':<24} {'in-process s':>12} {'1 worker s':>10} {'2 workers s':>11} {'speed-up':>8} "
              f"{'efficiency':>10}"]
-    for name, t in rows:
+    for name, t in (("contact, 16 amplitudes", contact), ("mbs sweep, 16 speeds", sweep)):
         lines.append(f"{name:<24} {t[0]:>12.1f} {t[1]:>10.1f} {t[2]:>11.1f} {t[1] / t[2]:>8.2f} "
                      f"{t[1] / t[2] / 2:>10.0%}")
+    lines.append(f"contact: workers busy with cases {busy[1]:.0%} of the time on 1 worker, {busy[2]:.0%} on 2 "
+                 f"(a case: {contact[0] / len(cases):.1f} s in-process)")
     lines.append(f"mbs sweep on 2 workers: CW reduced once and sent {sweep[2]:.1f} s, reduced in every case "
                  f"{per_case:.1f} s (one reduction {reduction_s:.2f} s, {size_mb:.0f} MB pickled)")
     lines.append(f"starting and closing the two-worker LocalCluster: {startup_s:.1f} s (paid once per study)")
-    lines.append(f"load average (1 min) before {load_before:.2f}, after {load_after:.2f}; {os.cpu_count()} cores")
+    lines.append(f"best of {TRIALS} alternating runs; load average (1 min) before {load_before:.2f}, after "
+                 f"{load_after:.2f}; {os.cpu_count()} cores")
     print("\n" + "\n".join(lines))
