@@ -5,9 +5,11 @@
    scene asks for it) and no wear.
 3. Wear: ``wear_cycles`` simulated cycles with wear (if asked), COF frozen or evolving, each
    standing for ``cycle_jump`` real cycles.
-Each phase stops early once the contact is stationary: no point slipped over
-``stationary_window`` cycles (shakedown to stick). The wear phase also stops when loosening
-is evident: the clamp force has kept falling over the window while the stick area shrank.
+Each phase stops early once the contact is stationary: over ``stationary_window`` cycles
+no more than ``area_tolerance`` of the nominal area still slid (shakedown to stick; see
+:func:`active_slip_area_fraction` for what counts as sliding). The wear phase also stops when
+loosening is evident: the clamp force has kept falling over the window while the stick area
+shrank.
 
 No I/O here: every increment and cycle is handed to an observer; the pipeline writes files
 and draws progress bars. Units: mm, N, MPa, mJ.
@@ -52,7 +54,12 @@ class LoadProgram:
 
 @dataclass(frozen=True)
 class Procedure:
-    """Settings of the analysis procedure (counts are simulated cycles)."""
+    """Settings of the analysis procedure (counts are simulated cycles).
+
+    area_tolerance: fraction of the nominal area that may still slide in a stuck contact.
+    slip_tolerance: a point slides in a cycle when its pressure-weighted irreversible slip
+    exceeds this fraction of γ_crit (see :func:`active_slip_area_fraction`).
+    """
 
     preload_increments: int = 10
     increments_per_cycle: int = 40
@@ -63,6 +70,7 @@ class Procedure:
     stationary_window: int = 10
     loosening_window: int = 20
     area_tolerance: float = 0.01
+    slip_tolerance: float = 0.1
 
 
 @dataclass
@@ -157,12 +165,39 @@ def cycle_figures(area: np.ndarray, nominal_area: float, status: np.ndarray,
     }
 
 
+def active_slip_area_fraction(area: np.ndarray, nominal_area: float, pressure: np.ndarray,
+                              dissipation_in_cycle: np.ndarray, cof: np.ndarray,
+                              critical_slip, slip_tolerance: float) -> float:
+    """Fraction of the nominal area that still slides in a cycle, in the sense of the verdict.
+
+    A point slides when its pressure-weighted irreversible slip over the cycle,
+    Σ p·Δγ_sl / p̄ (Σ p·Δγ_sl = dissipation / μ, the Archard wear driver; p̄ the mean pressure
+    over the nominal area at the end of the cycle), exceeds ``slip_tolerance``·γ_crit.
+    Two kinds of point fail that test although their status says slip: points worn out of
+    contact, whose pressure Archard wear drives towards zero only asymptotically (w·Δγ·p
+    vanishes with p), and points at the stick limit whose irreversible slip is a tiny
+    fraction of the elastic slip γ_crit the law already treats as stick. Neither carries
+    friction load nor wears or evolves its COF any more. Units: area mm², pressure MPa,
+    dissipation mJ/mm², critical_slip mm.
+    """
+    mean_pressure = float(np.sum(pressure * area) / nominal_area) if nominal_area > 0 else 0.0
+    if mean_pressure <= 0.0:
+        return 0.0
+    weighted_slip = np.divide(dissipation_in_cycle, cof, out=np.zeros_like(dissipation_in_cycle),
+                              where=cof > 0.0) / mean_pressure
+    sliding = weighted_slip > slip_tolerance * np.broadcast_to(critical_slip, area.shape)
+    return _fractions(area, nominal_area, sliding)
+
+
 def _verdict(history: list[CycleSummary], procedure: Procedure, stationary: bool) -> str:
+    """``loosening`` (see :func:`_loosening`), else ``stick`` when at most ``area_tolerance``
+    of the area still slid in the last cycle (:func:`active_slip_area_fraction`; histories
+    without it fall back to the status-based slip area), else ``damage``."""
     last = history[-1].figures
-    tol = procedure.area_tolerance
     if _loosening(history, procedure):
         return "loosening"
-    if last["slip_area_fraction"] <= tol:
+    sliding = last.get("active_slip_area_fraction", last["slip_area_fraction"])
+    if sliding <= procedure.area_tolerance:
         return "stick"
     return "damage"
 
@@ -291,6 +326,7 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
             start_slip = state.slip_vector.copy()
             low, high = start_slip.copy(), start_slip.copy()
             start_dissipation = state.dissipation.copy()
+            start_cof = state.cof.copy()
             max_util = np.zeros(solver.n_points)
             max_shear = np.zeros(solver.n_points)
             worst = np.zeros(solver.n_points, dtype=np.int8)
@@ -317,12 +353,15 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
                 clamp_force=None if bolts is None else float(bolt_forces(equilibrium).sum()))
             summary.figures = cycle_figures(area, nominal_area, cycle_status, max_util, state,
                                             cof_initial, law.cof_max, procedure.area_tolerance)
+            summary.figures["active_slip_area_fraction"] = active_slip_area_fraction(
+                area, nominal_area, summary.pressure, summary.dissipation_in_cycle, start_cof,
+                law.critical_slip, procedure.slip_tolerance)
             summary.figures["clamp_force_N"] = summary.clamp_force
             history.append(summary)
             del history[:-keep]
             observer.cycle(summary)
-            slipped = summary.figures["slip_area_fraction"] > 0.0
-            quiet_cycles = 0 if slipped else quiet_cycles + 1
+            slid = summary.figures["active_slip_area_fraction"] > procedure.area_tolerance
+            quiet_cycles = 0 if slid else quiet_cycles + 1
             if quiet_cycles >= procedure.stationary_window:
                 stationary = True
             elif phase == "wear" and _loosening(history, procedure):
@@ -362,4 +401,4 @@ def _utilisation(equilibrium: Equilibrium, solver: ContactSolver) -> tuple[np.nd
 
 
 __all__ = ["LoadProgram", "Procedure", "run", "Observer", "CycleSummary", "IncrementRecord",
-           "RunResult", "Snapshot", "cycle_figures"]
+           "RunResult", "Snapshot", "cycle_figures", "active_slip_area_fraction"]
