@@ -137,7 +137,8 @@ def coupled_program(model: "Model", wing_amplitude: float | None = None) -> "Mod
 
 def select_points(coordinates: np.ndarray, selection: dict, where: str, sets=None) -> np.ndarray:
     """Boolean mask of points (n, dim): a named node set of the mesh file (``sets``, a
-    :class:`reduction.mesh_io.MeshModel`), a box, a ring or a plane (mm, tolerance 1e-6·size)."""
+    :class:`reduction.mesh_io.MeshModel`), a box, a union of boxes, a ring or a plane (mm,
+    tolerance 1e-6·size)."""
     if "set" in selection:
         if sets is None:
             raise InputError(f"'{where}.set' names a node set, but the body's mesh is generated, "
@@ -145,9 +146,12 @@ def select_points(coordinates: np.ndarray, selection: dict, where: str, sets=Non
         mask = np.zeros(len(coordinates), dtype=bool)
         mask[sets.node_set(selection["set"])] = True
         return mask
-    if "box" in selection:
-        low, high = (np.asarray(c, dtype=float) for c in selection["box"])
-        return np.all((coordinates >= low) & (coordinates <= high), axis=1)
+    if "box" in selection or "boxes" in selection:
+        mask = np.zeros(len(coordinates), dtype=bool)
+        for box in ([selection["box"]] if "box" in selection else selection["boxes"]):
+            low, high = (np.asarray(c, dtype=float) for c in box)
+            mask |= np.all((coordinates >= low) & (coordinates <= high), axis=1)
+        return mask
     span = float(np.ptp(coordinates)) or 1.0
     if "ring" in selection:
         ring = selection["ring"]

@@ -57,11 +57,11 @@ class LimitResult:
     def to_json(self) -> dict:
         runs = sorted(self.runs, key=lambda r: r.amplitude_mm)
         return {
-            "limit_um": None if self.limit_mm is None else 1e3 * self.limit_mm,
-            "limit_mm": self.limit_mm,
-            "bracket_um": [None if a is None else 1e3 * a for a in self.bracket_mm],
-            "tolerance_um": 1e3 * self.tolerance_mm,
-            "runs": [{"amplitude_um": 1e3 * r.amplitude_mm, "verdict": r.verdict, "error": r.error,
+            "limit_um": None if self.limit_mm is None else float(1e3 * self.limit_mm),
+            "limit_mm": None if self.limit_mm is None else float(self.limit_mm),
+            "bracket_um": [None if a is None else float(1e3 * a) for a in self.bracket_mm],
+            "tolerance_um": float(1e3 * self.tolerance_mm),
+            "runs": [{"amplitude_um": float(1e3 * r.amplitude_mm), "verdict": r.verdict, "error": r.error,
                       **{k: r.figures.get(k) for k in FIGURES}} for r in runs],
         }
 
@@ -157,12 +157,12 @@ def _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out
     round_number = 0
     while upper - lower > tolerance_mm:
         round_number += 1
-        points = lower + (upper - lower) * np.arange(1, parallel + 1) / (parallel + 1)
-        evaluate(list(points), f"limit: round {round_number}")
+        points = [float(a) for a in lower + (upper - lower) * np.arange(1, parallel + 1) / (parallel + 1)]
+        evaluate(points, f"limit: round {round_number}")
         safe = [a for a in points if runs[a].safe]
         unsafe = [a for a in points if not runs[a].safe]
-        lower = max(safe, default=lower)
-        upper = min([a for a in unsafe if a > lower], default=upper)
+        lower = float(max(safe, default=lower))
+        upper = float(min([a for a in unsafe if a > lower], default=upper))
     return LimitResult(lower, (lower, upper), tolerance_mm, list(runs.values()))
 
 

@@ -201,7 +201,7 @@ def _check_table(table, schema, where, problems):
 def _check_selection(selection, where, dim, problems):
     keys = set(selection) - {"body"}
     if not keys:
-        problems.append(f"'{where}' needs a selection: box = [[min...], [max...]], axis = ... with "
+        problems.append(f"'{where}' needs a selection: box = [[min...], [max...]], boxes = [box, ...], axis = ... with "
                         "value = ..., ring = {{ center, axis, inner_radius, outer_radius }}, "
                         "or set = \"name\" (a node set of the mesh file)")
     for key in keys:
@@ -217,18 +217,21 @@ def _check_selection(selection, where, dim, problems):
                     and 0 <= ring["inner_radius"] < ring["outer_radius"]):
                 problems.append(f"'{where}.ring' needs center ({dim} mm), axis, 0 <= inner_radius < outer_radius (mm)")
             continue
-        if key == "box":
-            box = selection["box"]
-            if not (isinstance(box, list) and len(box) == 2 and all(
-                    isinstance(c, list) and len(c) == dim and all(isinstance(v, NUMBER) for v in c) for c in box)):
-                problems.append(f"'{where}.box' must be [[min x, y{', z' if dim == 3 else ''}], [max ...]] in mm")
+        if key in ("box", "boxes"):
+            boxes = [selection["box"]] if key == "box" else selection["boxes"]
+            if not isinstance(boxes, list) or not boxes or not all(
+                    isinstance(box, list) and len(box) == 2 and all(
+                        isinstance(c, list) and len(c) == dim and all(isinstance(v, NUMBER) for v in c) for c in box)
+                    for box in boxes):
+                shape = f"[[min x, y{', z' if dim == 3 else ''}], [max ...]]"
+                problems.append(f"'{where}.{key}' must be {shape if key == 'box' else '[' + shape + ', ...]'} in mm")
         elif key == "axis":
             if selection["axis"] not in ("x", "y", "z")[:dim]:
                 problems.append(f"'{where}.axis' must be one of {('x', 'y', 'z')[:dim]}")
             if not isinstance(selection.get("value"), NUMBER):
                 problems.append(f"'{where}.value' must be the coordinate (mm) of the plane")
         elif key not in ("value", "tolerance"):
-            problems.append(f"unknown key '{where}.{key}'{_suggest(key, ['box', 'axis', 'value', 'tolerance'])}")
+            problems.append(f"unknown key '{where}.{key}'{_suggest(key, ['box', 'boxes', 'axis', 'value', 'tolerance'])}")
 
 
 def validate(data: dict, source: str = "scene") -> list[str]:
