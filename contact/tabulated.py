@@ -2,9 +2,10 @@
 
 A :class:`TabulatedProgram` is a :class:`contact.procedure.LoadProgram` in which some patterns
 (shape ``"history"``) follow sampled values over one cycle instead of sin 2πt: the inertia
-loads of a counterweight driven by multibody histories, for instance. They are zero in the
-preload (the bolts are tightened at standstill and locked) and take their tabulated values,
-mean included, from the first cycle on.
+loads of a counterweight driven by multibody histories, for instance. They are zero while the
+bolts are tightened (at standstill) and locked, come on with their mean values in the run-up
+that follows (:meth:`TabulatedProgram.run_up`, no COF evolution or wear there), and follow
+their tabulated values from the first cycle on.
 """
 
 from __future__ import annotations
@@ -22,6 +23,14 @@ class TabulatedProgram(LoadProgram):
     at phase 0 is the one at phase 1). Between samples the amplitude is interpolated linearly."""
 
     tables: dict = field(default_factory=dict)
+
+    def run_up(self, fraction: float) -> np.ndarray:
+        """Amplitudes while the tabulated means come on after the preload (engine run-up):
+        ``fraction`` of each table's mean, every other pattern as between cycles."""
+        amplitudes = super().cycle(0.0)
+        for name, samples in self.tables.items():
+            amplitudes[self.patterns.index(name)] = fraction * float(np.mean(samples))
+        return amplitudes
 
     def cycle(self, phase: float) -> np.ndarray:
         amplitudes = super().cycle(phase)

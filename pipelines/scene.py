@@ -63,6 +63,7 @@ SCHEMA = {
         "description": (str, False, None, "one-line description"),
         "dimension": (int, True, lambda v: None if v in (2, 3) else "must be 2 or 3", "2 (plane strain) or 3"),
         "effects": (list, True, None, f"list of effects from {KNOWN_EFFECTS}"),
+        "base": (str, False, None, "scene file this one extends (its tables, then these on top)"),
     },
     "materials.*": {
         "youngs_modulus": (NUMBER, True, _positive, "Young's modulus E, MPa"),
@@ -414,20 +415,45 @@ def parse(text: str, source: str = "scene", path: Path | None = None) -> Scene:
     return Scene(data, path)
 
 
-def load(path: str | Path, overrides: dict | None = None) -> Scene:
-    """Read a scene file; ``overrides`` {"procedure.wear_cycles": 5, ...} replace values first."""
-    path = Path(path)
+def _merged(base: dict, own: dict) -> dict:
+    """``own`` on top of ``base``: tables merge key by key, anything else is replaced."""
+    out = dict(base)
+    for key, value in own.items():
+        out[key] = _merged(base[key], value) if isinstance(value, dict) and isinstance(base.get(key), dict) else value
+    return out
+
+
+def _read(path: Path, seen: tuple = ()) -> dict:
+    """The TOML of a scene file with its ``scene.base`` chain resolved (relative to the file)."""
     if not path.is_file():
         raise InputError(f"scene file {path} does not exist")
-    text = path.read_text()
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as error:
+        raise InputError(f"{path}: not valid TOML: {error}") from None
+    base = data.get("scene", {}).get("base") if isinstance(data.get("scene"), dict) else None
+    if base is None:
+        return data
+    base_path = (path.parent / base).resolve()
+    if base_path in seen:
+        raise InputError(f"{path}: 'scene.base' chain loops back to {base_path}")
+    merged = _merged(_read(base_path, seen + (base_path,)), data)
+    del merged["scene"]["base"]
+    return merged
+
+
+def load(path: str | Path, overrides: dict | None = None) -> Scene:
+    """Read a scene file (and the file its ``scene.base`` extends); ``overrides``
+    {"procedure.wear_cycles": 5, ...} replace values before validation."""
+    path = Path(path)
+    data = _read(path)
     if overrides:
-        data = tomllib.loads(text)
         apply_overrides(data, overrides)
-        problems = validate(data, str(path))
-        if problems:
-            raise InputError(f"{path}: " + "; ".join(problems))
-        return Scene(data, path)
-    return parse(text, str(path), path)
+    problems = validate(data, str(path))
+    if problems:
+        raise InputError(f"{path}: " + ("\n  - ".join([f"{len(problems)} problem(s):"] + problems)
+                                        if len(problems) > 1 else problems[0]))
+    return Scene(data, path)
 
 
 def apply_overrides(data: dict, overrides: dict) -> None:
