@@ -206,7 +206,10 @@ def _loosening(history: list[CycleSummary], procedure: Procedure) -> bool:
     """Loosening is evident when, over the last ``loosening_window`` wear cycles, the clamp
     force keeps falling without its rate decaying (second half at least 0.8 of the first),
     by a visible amount (0.5 % of the clamp force), while the stick area shrinks or the
-    whole contact slides."""
+    whole contact slides. The shrinking is the least-squares trend of the stick area over
+    the window, not its first and last values: points at the stick limit flicker between
+    stick and slip from cycle to cycle by a few per cent of the area, and an endpoint
+    comparison called a contact loosening whose stick area was steady or regrowing."""
     wear_cycles = [c for c in history if c.phase == "wear" and c.clamp_force is not None]
     if len(wear_cycles) < procedure.loosening_window:
         return False
@@ -218,7 +221,8 @@ def _loosening(history: list[CycleSummary], procedure: Procedure) -> bool:
     second_rate = (force[middle] - force[-1]) / (len(force) - 1 - middle)
     falling = second_rate > 0.0 and second_rate >= 0.8 * first_rate
     visible = force[0] - force[-1] > 5e-3 * abs(force[0])
-    stick_shrinks = stick[-1] < stick[0] - procedure.area_tolerance or stick[-1] <= procedure.area_tolerance
+    stick_change = np.polyfit(np.arange(len(stick)), stick, 1)[0] * (len(stick) - 1)
+    stick_shrinks = stick_change < -procedure.area_tolerance or stick[-1] <= procedure.area_tolerance
     return bool(falling and visible and stick_shrinks)
 
 
