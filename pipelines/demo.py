@@ -26,8 +26,7 @@ DEMO_OVERRIDES = {
     "bodies.counterweight.mesh.contact_size": 10.0,
     "bodies.web.mesh.contact_size": 10.0,
     "procedure.cof_cycles": 60,
-    "procedure.wear_cycles": 20,
-    "procedure.cycle_jump": 65.0,
+    "procedure.wear_cycles": 30,
 }
 DEMO_SPEEDS_RPM = np.arange(600.0, 901.0, 50.0)
 DEMO_AMPLITUDE_RANGE_MM = (0.1, 0.4)

@@ -3,7 +3,8 @@
 Each amplitude is one complete contact run (preload, COF phase, wear phase) of the scene with
 its wing vibration scaled (:func:`pipelines.build.coupled_program`; nothing is re-condensed).
 A run in which the joint cannot carry the load at all (tangential equilibrium lost: the CW
-slides off) counts as ``loosening``. The search assumes that a larger amplitude never gives a
+slides off) counts as ``loosening``, and so does a wear phase whose wear runs away (the wear
+increment does not shrink with the step: the interface slides by itself); both are noted. The search assumes that a larger amplitude never gives a
 safer verdict. It evaluates the ends of the range first, then narrows the bracket
 [largest stuck amplitude, smallest amplitude that is not stuck] in rounds of as many
 amplitudes as there are workers (one worker: bisection), until the bracket is no wider than
@@ -62,6 +63,7 @@ class LimitResult:
             "bracket_um": [None if a is None else float(1e3 * a) for a in self.bracket_mm],
             "tolerance_um": float(1e3 * self.tolerance_mm),
             "runs": [{"amplitude_um": float(1e3 * r.amplitude_mm), "verdict": r.verdict, "error": r.error,
+                      "note": r.figures.get("note"),
                       **{k: r.figures.get(k) for k in FIGURES}} for r in runs],
         }
 
@@ -104,7 +106,10 @@ def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_d
                 outcome = run_model(model, folder, progress=False, plots=False)
         except ConvergenceError as error:
             if "tangential equilibrium is lost" in str(error):
-                return AmplitudeRun(amplitude_mm, "loosening", {"gross_sliding": True})
+                return AmplitudeRun(amplitude_mm, "loosening", {"note": "the CW slides off: tangential equilibrium lost"})
+            if "wear increment stays above the cap" in str(error):
+                return AmplitudeRun(amplitude_mm, "loosening",
+                                    {"note": "runaway wear: the wear phase slid by itself at the scene's cycle jump"})
             return AmplitudeRun(amplitude_mm, None, {}, f"ConvergenceError: {error}")
         summary = {k: v for k, v in outcome.summary.items() if isinstance(v, (int, float, str, type(None)))}
         return AmplitudeRun(amplitude_mm, outcome.summary["verdict"], summary)
@@ -179,7 +184,9 @@ def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    runs = sorted((r for r in result.runs if r.verdict is not None), key=lambda r: r.amplitude_mm)
+    everything = sorted((r for r in result.runs if r.verdict is not None), key=lambda r: r.amplitude_mm)
+    runs = [r for r in everything if "note" not in r.figures]  # runs with figures
+    failed_early = [r for r in everything if "note" in r.figures]  # slid off or wear ran away
     amplitude = np.array([1e3 * r.amplitude_mm for r in runs])
     loss = np.array([100 * (r.figures.get("clamp_force_loss_fraction") or 0.0) for r in runs])
     damaged = np.array([100 * (r.figures.get("damaged_area_fraction") or 0.0) for r in runs])
@@ -191,6 +198,9 @@ def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
             mask = np.array([r.verdict == verdict for r in runs])
             if mask.any():
                 ax.scatter(amplitude[mask], values[mask], color=colour, label=verdict, zorder=2)
+        if failed_early:
+            ax.scatter([1e3 * r.amplitude_mm for r in failed_early], [ax.get_ylim()[1]] * len(failed_early),
+                       marker="x", color="tab:red", label="slides off / runaway wear", zorder=2, clip_on=False)
         if result.limit_mm is not None:
             ax.axvline(1e3 * result.limit_mm, color="k", linestyle="--", linewidth=1)
         ax.set_ylabel(label)
