@@ -1,6 +1,8 @@
 """The analysis procedure of the paper's section 3: preload, COF phase, wear phase, verdict.
 
-1. Preload: load patterns marked ``ramp`` go from 0 to full in ``preload_increments``.
+1. Preload: load patterns marked ``ramp`` go from 0 to full in ``preload_increments``; bolts
+   are locked; a program with a ``run_up`` (operating mean loads, e.g. a counterweight's
+   centrifugal load) then ramps those in as many increments. Nothing evolves or wears here.
 2. COF stabilisation: ``cof_cycles`` cycles of the cyclic patterns with COF evolution (if the
    scene asks for it) and no wear.
 3. Wear: ``wear_cycles`` simulated cycles with wear (if asked), COF frozen or evolving, each
@@ -157,7 +159,10 @@ def cycle_figures(area: np.ndarray, nominal_area: float, status: np.ndarray,
         "slip_area_fraction": _fractions(area, nominal_area, slipped),
         "damaged_area_fraction": _fractions(area, nominal_area, damaged),
         "worn_area_fraction": _fractions(area, nominal_area, np.asarray(wear) > 1e-9),
-        "cof_evolved_area_fraction": _fractions(area, nominal_area, state.cof > cof_initial + 1e-9),
+        # evolved: risen by more than 1 % of its range (numerical micro-slips of equilibrium
+        # iterations raise μ by round-off amounts that are not fretting)
+        "cof_evolved_area_fraction": _fractions(area, nominal_area, state.cof > cof_initial + 0.01 * (
+            np.broadcast_to(cof_max, area.shape) - cof_initial)),
         "max_wear_depth_mm": float(np.max(wear, initial=0.0)),
         "wear_volume_mm3": float(np.sum(np.asarray(wear) * area)),
         "dissipated_energy_mJ": float(np.sum(state.dissipation * area)),
@@ -290,11 +295,18 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
         for k in range(1, procedure.preload_increments + 1):
             step(program.preload(k / procedure.preload_increments), Effects(), "preload", 0,
                  k / procedure.preload_increments)
-        closed = equilibrium.forces.reshape(solver.n_points, -1)[:, 0] > 0.0
-        nominal_area = float(area[closed].sum())
         if bolts is not None:
             lock(bolts.elongation(solver.space, equilibrium.control))
             equilibrium = replace(equilibrium, amplitudes=bolts.locked_amplitudes(solver.space, equilibrium))
+            program = replace(program, held={p: equilibrium.amplitudes[program.patterns.index(p)]
+                                             for p in bolts.patterns})
+        run_up = getattr(program, "run_up", None)
+        if run_up is not None:  # operating mean loads come on after the bolts are locked (engine run-up)
+            for k in range(1, procedure.preload_increments + 1):
+                step(run_up(k / procedure.preload_increments), Effects(), "preload", 0,
+                     1.0 + k / procedure.preload_increments)
+        closed = equilibrium.forces.reshape(solver.n_points, -1)[:, 0] > 0.0
+        nominal_area = float(area[closed].sum())
         history: list[CycleSummary] = []
         cycle_number, first_phase, done_in_phase, quiet_cycles, equivalent = 0, 0, 0, 0, 0.0
         initial_clamp = None if bolts is None else float(bolt_forces(equilibrium).sum())
