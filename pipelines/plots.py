@@ -69,6 +69,20 @@ def _path_plot(coordinates, final, names, a, b, title, out_dir) -> Path:
     return target
 
 
+def _map(mesh, value, name, a, b, title, target) -> Path:
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    mappable = ax.tricontourf(mesh, value, levels=24, cmap="viridis")
+    fig.colorbar(mappable, ax=ax, label=FIELD_LABELS[name])
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"{'xyz'[a]} [mm]")
+    ax.set_ylabel(f"{'xyz'[b]} [mm]")
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(target, dpi=130)
+    plt.close(fig)
+    return target
+
+
 def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
     """Draw the standard figures of one results file; returns the PNG paths."""
     out_dir = Path(out_dir)
@@ -109,19 +123,18 @@ def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
                 facets if facets.shape[1] == 3 else np.concatenate([facets[:, [0, 1, 2]], facets[:, [0, 2, 3]]]))
             mesh = matplotlib.tri.Triangulation(coordinates[:, a], coordinates[:, b], triangles)
             for name in names:
-                fig, ax = plt.subplots(figsize=(6, 4.5))
-                value = _field(final, name)
-                mappable = ax.tricontourf(mesh, value, levels=24, cmap="viridis")
-                fig.colorbar(mappable, ax=ax, label=FIELD_LABELS[name])
-                ax.set_aspect("equal")
-                ax.set_xlabel(f"{'xyz'[a]} [mm]")
-                ax.set_ylabel(f"{'xyz'[b]} [mm]")
-                ax.set_title(f"{title}: {name.replace('_', ' ')}")
-                fig.tight_layout()
-                target = out_dir / f"{name}_map.png"
-                fig.savefig(target, dpi=130)
-                plt.close(fig)
-                written.append(target)
+                written.append(_map(mesh, _field(final, name), name, a, b, f"{title}: {name.replace('_', ' ')}",
+                                    out_dir / f"{name}_map.png"))
+            # the stabilised state before the wear phase (the paper's Figs. 8, 15 and 16a-b)
+            phase_of = dict(zip(file["cycles/cycle"][()], file["cycles/phase"][()]))
+            recorded = file["cycles/fields/cycle"][()] if "cycles/fields/cycle" in file else np.zeros(0, int)
+            cof_rows = [k for k, c in enumerate(recorded) if phase_of.get(c) == 1]
+            if cof_rows and any(p == 2 for p in phase_of.values()):
+                row, fields = cof_rows[-1], file["cycles/fields"]
+                for name in ("cof", "slip_range", "max_utilised_cof", "dissipation_in_cycle"):
+                    written.append(_map(mesh, fields[name][row], name, a, b,
+                                        f"{title}: {name.replace('_', ' ')} after the COF phase (cycle {recorded[row]})",
+                                        out_dir / f"{name}_map_end_of_cof_phase.png"))
         cycles = file["cycles"]
         if "figures" in cycles:
             figures = cycles["figures"]
