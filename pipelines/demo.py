@@ -121,7 +121,7 @@ def describe(result: DemoResult) -> str:
              f"  verdict: {s['verdict'].upper()} (COF evolved over {s['cof_evolved_area_fraction']:.0%} of the contact)"]
     if s["bolt_force_initial_N"] is not None:
         lines.append(f"  clamp force {s['bolt_force_initial_N'] / 1e3:.0f} kN -> {s['bolt_force_final_N'] / 1e3:.0f} kN "
-                     f"({100 * s['clamp_force_loss_fraction']:+.2f} % loss)")
+                     f"({100 * s['clamp_force_loss_fraction']:.2f} % loss)")
     if s["amplitude_limit_um"] is None:
         lines.append("  amplitude limit: below the searched range")
     else:
