@@ -245,3 +245,26 @@ def test_stage_cache_survives_a_broken_entry(tmp_path):
     assert cache.get("demo", {"a": 1}, lambda: 42) == 42
     assert cache.get("demo", {"a": np.arange(3)}, lambda: 43) == 43
     assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_sweep_margins_are_limit_over_calibrated_amplitude(tmp_path, monkeypatch, capsys):
+    """`fretwork sweep --margins`: the wing amplitude at the scene's speed is the stated one
+    (calibration), margin = limit / amplitude at every speed, /margins in the sweep file."""
+    import h5py
+
+    monkeypatch.setattr(limits, "run_amplitude", _fake_run)
+    scene = tmp_path / "cw.toml"
+    scene.write_text(SCENE.read_text().replace("n_modes = 6", "n_modes = 4").replace("revolutions = 3.0",
+                                                                                       "revolutions = 1.5"))
+    out = tmp_path / "sweep.h5"
+    assert main(["sweep", str(scene), "--speeds", "700,750", "--margins", "--amplitude", "100:400",
+                 "--tolerance", "5", "--out", str(out), "--workers", "0", "--cache", str(tmp_path), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    amplitude = dict(zip(summary["speeds_rpm"], summary["wing_amplitude_um"]))
+    assert amplitude[750.0] == pytest.approx(100.0, rel=1e-9)
+    assert summary["limit_um"] == pytest.approx(263.7, abs=5.0)
+    for a, m in zip(summary["wing_amplitude_um"], summary["margin"]):
+        assert m == pytest.approx(summary["limit_um"] / a, rel=1e-9)
+    with h5py.File(out) as results:
+        assert results["margins/margin"].attrs["units"] == "1"
+        assert np.allclose(results["margins/margin"][()], summary["margin"])
