@@ -74,18 +74,26 @@ def test_counterweight_and_web_meshes_match_on_the_hub_face():
     assert mass == pytest.approx(7.85e-9 * volume, rel=1e-9)
 
 
-def test_quasi_static_response_to_the_acceleration_field_reproduces_the_multibody_wing_vibration(loading):
+def test_quasi_static_response_to_the_acceleration_field_reproduces_the_multibody_modes(loading):
     """d'Alembert: the CW held at its face and loaded by −M·a(x, t) deforms as the multibody CW
-    vibrates (the modal EOM without its 2 % damping term). Compared at the dominant frequency:
-    amplitude within 25 % (hexahedra on 20 mm vs the multibody quadratic tetrahedra) and phase
-    within 20°."""
+    vibrates. Projected on the multibody modes (Ψᵀ M u; the static response also holds the
+    residual flexibility of the modes the multibody model leaves out), the modal coordinates
+    are the multibody ones up to the damping term of the modal equation, 2ζ q̇/ω (2 % damping)
+    and the hexahedral vs quadratic-tetrahedral discretisation: torsion-mode coordinate within
+    10 % at every sample, relative to its amplitude (measured 4.6 %). The multibody CW has no
+    screw holes, so the hexahedral CW gets 2.5 mm ones here; with the scene's 44 mm holes it
+    is 15 % softer in torsion and its static response 15 % larger."""
     g = loading.geometry
-    mesh = counterweight_block(g["width"], g["height"], g["thickness"], 220.0, 30.0, 65.0, 22.0, 20.0)
+    mesh = counterweight_block(g["width"], g["height"], g["thickness"], 260.0, 30.0, 95.0, 2.5, 10.0)
     elastic = assemble_elastic_body(mesh, 210000.0, 0.3, 7.85e-9)
     patterns = coupling.inertia_patterns(elastic, loading)
     solve = clamped_solver(mesh, elastic)
-    samples = np.arange(0, len(loading.time), 4)
-    response = []
+    shapes = coupling.interpolate_modes(loading, elastic.coordinates)
+    torsion = np.zeros(elastic.n_dofs)
+    torsion[elastic.node_dofs.ravel()] = shapes[:, :, loading.torsion_mode].ravel()
+    projector = elastic.mass @ torsion / (torsion @ (elastic.mass @ torsion))
+    samples = np.arange(0, len(loading.time), 7)
+    quasi_static = []
     for i in samples:
         load = patterns["spin_squared"] * loading.angular_velocity[i, 2] ** 2
         for k, axis in enumerate("xyz"):
@@ -94,18 +102,15 @@ def test_quasi_static_response_to_the_acceleration_field_reproduces_the_multibod
         for k in range(loading.n_modes):
             load = load + patterns[f"mode_{k + 1}"] * loading.modal_accelerations[i, k]
             load = load + patterns[f"coriolis_{k + 1}"] * loading.angular_velocity[i, 2] * loading.modal_velocities[i, k]
-        response.append(wing_torsion(elastic, solve(load)))
-    frequency = loading.dominant_frequency()
-    _, c1, s1 = coupling._harmonic(loading.time[samples], np.array(response), frequency)
-    _, c2, s2 = coupling._harmonic(loading.time[samples], loading.wing_torsion[samples], frequency)
-    quasi_static, multibody = complex(c1, s1), complex(c2, s2)
-    assert abs(quasi_static) == pytest.approx(abs(multibody), rel=0.25)
-    assert abs(np.angle(quasi_static / multibody, deg=True)) < 20.0
+        quasi_static.append(projector @ solve(load))
+    multibody = loading.modal_coordinates[samples, loading.torsion_mode]
+    scale = np.ptp(multibody) / 2
+    assert np.max(np.abs(np.array(quasi_static) - multibody)) < 0.10 * scale
 
 
 def test_centrifugal_pattern_carries_the_mass_times_spin_squared_times_radius(loading):
     g = loading.geometry
-    mesh = counterweight_block(g["width"], g["height"], g["thickness"], 220.0, 30.0, 65.0, 22.0, 20.0)
+    mesh = counterweight_block(g["width"], g["height"], g["thickness"], 260.0, 30.0, 95.0, 22.0, 20.0)
     elastic = assemble_elastic_body(mesh, 210000.0, 0.3, 7.85e-9)
     load = coupling.centrifugal_pattern(elastic, loading)
     radial = load[elastic.node_dofs[:, 1]].sum()
@@ -119,7 +124,7 @@ def test_centrifugal_pattern_carries_the_mass_times_spin_squared_times_radius(lo
 
 def test_wing_mode_pattern_twists_the_held_counterweight_by_one_millimetre_in_the_mode_shape(loading):
     g = loading.geometry
-    mesh = counterweight_block(g["width"], g["height"], g["thickness"], 220.0, 30.0, 65.0, 22.0, 20.0)
+    mesh = counterweight_block(g["width"], g["height"], g["thickness"], 260.0, 30.0, 95.0, 22.0, 20.0)
     elastic = assemble_elastic_body(mesh, 210000.0, 0.3, 7.85e-9)
     face = np.flatnonzero(np.abs(mesh.p[1]) < 1e-9)
     load = coupling.wing_mode_pattern(elastic, loading, face)
