@@ -273,3 +273,14 @@ def test_sweep_margins_are_limit_over_calibrated_amplitude(tmp_path, monkeypatch
     with h5py.File(out) as results:
         assert results["margins/margin"].attrs["units"] == "1"
         assert np.allclose(results["margins/margin"][()], summary["margin"])
+
+
+def test_a_repeated_amplitude_run_is_read_from_the_cache(tmp_path):
+    overrides = dict(COARSE, **{"procedure.cof_cycles": 3, "procedure.wear_cycles": 0})
+    before = stages.EXECUTIONS["contact_run"]
+    first = limits.run_amplitude(str(SCENE), overrides, 0.1, str(tmp_path))
+    again = limits.run_amplitude(str(SCENE), overrides, 0.1, str(tmp_path))
+    assert stages.EXECUTIONS["contact_run"] == before + 1
+    assert again == first and first.verdict in ("stick", "damage")
+    other = limits.run_amplitude(str(SCENE), overrides, 0.2, str(tmp_path))
+    assert stages.EXECUTIONS["contact_run"] == before + 2 and other.amplitude_mm == 0.2
