@@ -43,29 +43,20 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
              workers=None, progress=True) -> DemoResult:
     """Run the five stages (module doc) into ``out_dir``; returns the summary and stage times (s)."""
     from pipelines import scene as scenes
-    from pipelines.build import build, multibody_loading
     from pipelines.limit import find_limit, plot_limit, write_limit
     from pipelines.margins import MarginResult, calibration_factor, plot_margins, write_margins
-    from pipelines.run import run_model
+    from pipelines.run import run_scene
     from pipelines.stages import StageCache
 
     out_dir = Path(out_dir)
     overrides = dict(DEMO_OVERRIDES if overrides is None else overrides)
     scene = scenes.load(scene_path, overrides)
     cache = StageCache(cache_dir)
-    times = {}
-
-    clock = time.perf_counter()
-    loading = multibody_loading(scene, cache)
-    times["multibody_s"] = time.perf_counter() - clock
-    clock = time.perf_counter()
-    model = build(scene, cache=cache, multibody=loading)
-    times["contact_model_s"] = time.perf_counter() - clock
-    outcome = run_model(model, out_dir / "operating", progress=progress)
-    for name in ("contact_space_s", "cof_phase_s", "wear_phase_s"):
-        if name in outcome.stage_times:
-            times[name] = outcome.stage_times[name]
-    times["contact_outputs_s"] = outcome.stage_times.get("outputs_s", 0.0)
+    outcome = run_scene(scene, out_dir / "operating", progress=progress, cache=cache)
+    names = {"multibody_s": "multibody_s", "build_and_condense_s": "contact_model_s",
+             "contact_space_s": "contact_space_s", "cof_phase_s": "cof_phase_s", "wear_phase_s": "wear_phase_s",
+             "outputs_s": "contact_outputs_s"}
+    times = {ours: outcome.stage_times[theirs] for theirs, ours in names.items() if theirs in outcome.stage_times}
 
     clock = time.perf_counter()
     limit = find_limit(scene_path, *amplitude_range_mm, tolerance_mm=tolerance_mm,

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pipelines import coupling, limit as limits, scene as scenes, stages
-from pipelines.build import build, coupled_program, multibody_loading
+from pipelines.build import build, multibody_loading
 from pipelines.cli import main
 from pipelines.meshes import counterweight_block, web_block
 from reduction.elasticity import assemble_elastic_body
