@@ -19,7 +19,7 @@ def _json(value) -> str:
 
 
 def _cache(args):
-    from pipelines.stages import StageCache, default_directory
+    from pipelines.stages import default_directory
 
     return None if getattr(args, "no_cache", False) else (args.cache or str(default_directory()))
 
@@ -52,12 +52,23 @@ def _human_summary(outcome) -> str:
              f"  stick {s['stick_area_fraction']:.1%}, slip {s['slip_area_fraction']:.1%}, "
              f"damaged {s['damaged_area_fraction']:.1%} of the contact area after the preload"
              + (" (wear has widened the contact)" if s['slip_area_fraction'] + s['stick_area_fraction'] > 1.0 else ""),
+             f"  still sliding (the verdict's measure) {s.get('active_slip_area_fraction', s['slip_area_fraction']):.1%}, "
+             f"COF evolved on {s['cof_evolved_area_fraction']:.1%}",
              f"  max wear depth {s['max_wear_depth_mm'] * 1000:.2f} µm, dissipated {s['dissipated_energy_mJ']:.4g} mJ"]
+    if "wing_amplitude_mm" in s:
+        lines.insert(1, f"  wing amplitude {1e3 * s['wing_amplitude_mm']:.0f} µm at {s['engine_speed_rpm']:.0f} rpm, "
+                        f"one load cycle = {s['load_cycle'].replace('_', ' ')} ({s['load_cycle_frequency_hz']:.0f} Hz)")
+    if s.get("bolt_force_initial_N") is not None:
+        lines.append(f"  clamp force {s['bolt_force_initial_N'] / 1e3:.4g} kN -> {s['bolt_force_final_N'] / 1e3:.4g} kN "
+                     f"({100 * s['clamp_force_loss_fraction']:.2f} % loss)")
     if s.get("min_stick_margin") is not None:
         lines.append(f"  smallest safety margin of stuck points: {s['min_stick_margin']:.3f}")
     if outcome.stage_times:
-        lines.append("  time: " + ", ".join(f"{name.removesuffix('_s').replace('_', ' ')} {value:.1f} s"
-                                           for name, value in outcome.stage_times.items()))
+        times = outcome.stage_times
+        phases = ", ".join(f"{k.removesuffix('_phase_s')} {v:.1f} s" for k, v in times.items() if k.endswith("_phase_s"))
+        lines.append("  time: " + ", ".join(
+            f"{name.removesuffix('_s').replace('_', ' ')} {value:.1f} s" + (f" ({phases})" if name == "procedure_s" and phases else "")
+            for name, value in times.items() if not name.endswith("_phase_s")))
     lines.append(f"  results: {outcome.results_path}")
     if outcome.plots:
         lines.append(f"  plots:   {Path(outcome.plots[0]).parent}")
