@@ -105,7 +105,11 @@ def cmd_limit(args) -> int:
     low, high = parse_range_um(args.amplitude)
     if args.tolerance <= 0:
         raise InputError("--tolerance must be positive (µm)")
-    name = scenes.load(args.scene).name
+    loaded = scenes.load(args.scene)
+    if "coupling" not in loaded.data:
+        raise InputError(f"{args.scene}: the amplitude limit needs a coupled scene (a [coupling] table whose "
+                         "wing amplitude the search varies)")
+    name = loaded.name
     out = Path(args.out)
     result = find_limit(args.scene, low, high, tolerance_mm=1e-3 * args.tolerance, cache_dir=_cache(args),
                         out_dir=out / "runs", scheduler=args.scheduler, workers=args.workers,

@@ -284,3 +284,8 @@ def test_a_repeated_amplitude_run_is_read_from_the_cache(tmp_path):
     assert again == first and first.verdict in ("stick", "damage")
     other = limits.run_amplitude(str(SCENE), overrides, 0.2, str(tmp_path))
     assert stages.EXECUTIONS["contact_run"] == before + 2 and other.amplitude_mm == 0.2
+
+
+def test_limit_of_an_uncoupled_scene_is_bad_input(capsys):
+    assert main(["limit", str(EXAMPLES / "cylinder_on_plane.toml"), "--amplitude", "100:200"]) == 2
+    assert "needs a coupled scene" in capsys.readouterr().err
