@@ -99,17 +99,12 @@ def cmd_demo(args) -> int:
 
 
 def cmd_limit(args) -> int:
-    from pipelines.limit import find_limit, parse_range_um, plot_limit, write_limit
-    from pipelines import scene as scenes
+    from pipelines.limit import coupled_scene, find_limit, parse_range_um, plot_limit, write_limit
 
     low, high = parse_range_um(args.amplitude)
     if args.tolerance <= 0:
         raise InputError("--tolerance must be positive (µm)")
-    loaded = scenes.load(args.scene)
-    if "coupling" not in loaded.data:
-        raise InputError(f"{args.scene}: the amplitude limit needs a coupled scene (a [coupling] table whose "
-                         "wing amplitude the search varies)")
-    name = loaded.name
+    name = coupled_scene(args.scene).name
     out = Path(args.out)
     result = find_limit(args.scene, low, high, tolerance_mm=1e-3 * args.tolerance, cache_dir=_cache(args),
                         out_dir=out / "runs", scheduler=args.scheduler, workers=args.workers,

@@ -42,9 +42,11 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
              amplitude_range_mm=DEMO_AMPLITUDE_RANGE_MM, tolerance_mm=DEMO_TOLERANCE_MM, cache_dir=None,
              workers=None, progress=True) -> DemoResult:
     """Run the five stages (module doc) into ``out_dir``; returns the summary and stage times (s)."""
+    from mbs.sweep import speed_sweep
     from pipelines import scene as scenes
+    from pipelines.build import multibody_params
     from pipelines.limit import find_limit, plot_limit, write_limit
-    from pipelines.margins import MarginResult, calibration_factor, plot_margins, write_margins
+    from pipelines.margins import margins_of, plot_margins, write_margins
     from pipelines.run import run_scene
     from pipelines.stages import StageCache
 
@@ -67,17 +69,9 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
     write_limit(limit, out_dir / "limit" / "limit.json")
 
     clock = time.perf_counter()
-    from mbs.sweep import speed_sweep
-    from pipelines.build import multibody_params
-
     sweep_path = out_dir / "sweep.h5"
     sweep = speed_sweep(multibody_params(scene), speeds_rpm, path=sweep_path, progress=progress, workers=workers)
-    counterweight = scene.data["coupling"].get("counterweight", 1) - 1
-    factor = calibration_factor(scene, cache)
-    amplitude = factor * sweep.wing_amplitude[:, counterweight]
-    margin = (np.full_like(amplitude, np.nan) if limit.limit_mm is None
-              else limit.limit_mm / np.where(amplitude > 0, amplitude, np.nan))
-    margins = MarginResult(np.asarray(speeds_rpm, float), amplitude, factor, limit, margin, float(max(speeds_rpm)))
+    margins = margins_of(scene, sweep, limit, cache)
     write_margins(sweep_path, margins)
     margin_plot = plot_margins(margins, out_dir / "margins.png", f"{scene.name}: fretting safety margin")
     times["speed_sweep_s"] = time.perf_counter() - clock

@@ -79,31 +79,53 @@ def parse_range_um(text: str) -> tuple[float, float]:
     return 1e-3 * low, 1e-3 * high
 
 
-def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_dir: str | None,
-                  out_dir: str | None = None) -> AmplitudeRun:
-    """One contact run of the scene at a wing amplitude (mm); a case of the limit search."""
-    from contact.solver import ConvergenceError
+def coupled_scene(scene_path, overrides: dict | None = None):
+    """The scene of a limit search; a scene without [coupling] has no wing amplitude to vary."""
     from pipelines import scene as scenes
-    from pipelines.build import build, coupled_program
-    from pipelines.run import run_model
-    from pipelines.stages import StageCache
 
     scene = scenes.load(scene_path, overrides or None)
     if "coupling" not in scene.data:
-        raise InputError(f"{scene_path}: the amplitude limit needs a coupled scene (a [coupling] table)")
+        raise InputError(f"{scene_path}: the amplitude limit needs a coupled scene (a [coupling] table whose "
+                         "wing amplitude the search varies)")
+    return scene
+
+
+_built: dict = {}  # the last condensed model of this process: stage key → Model (not picklable)
+
+
+def _condensed_model(scene, cache):
+    """The scene's built model, kept for the next amplitude in this process (a worker runs many)."""
+    from pipelines.build import build
+    from pipelines.stages import stage_key
+
+    key = stage_key("contact_model", scene.data)
+    if key not in _built:
+        _built.clear()
+        _built[key] = build(scene, cache=cache)
+    return _built[key]
+
+
+def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_dir: str | None,
+                  out_dir: str | None = None) -> AmplitudeRun:
+    """One contact run of the scene at a wing amplitude (mm); a case of the limit search."""
+    import tempfile
+    from contextlib import nullcontext
+
+    from contact.solver import ConvergenceError
+    from pipelines.build import coupled_program
+    from pipelines.run import run_model
+    from pipelines.stages import StageCache
+
+    scene = coupled_scene(scene_path, overrides)
     cache = StageCache(cache_dir)
 
     def compute() -> AmplitudeRun:
-        model = coupled_program(build(scene, cache=cache), amplitude_mm)
-        folder = Path(out_dir) / f"amplitude_{1e3 * amplitude_mm:07.2f}um" if out_dir else None
+        model = coupled_program(_condensed_model(scene, cache), amplitude_mm)
+        folder = nullcontext(Path(out_dir) / f"amplitude_{1e3 * amplitude_mm:07.2f}um") if out_dir \
+            else tempfile.TemporaryDirectory()
         try:
-            if folder is None:
-                import tempfile
-
-                with tempfile.TemporaryDirectory() as temporary:
-                    outcome = run_model(model, Path(temporary), progress=False, plots=False)
-            else:
-                outcome = run_model(model, folder, progress=False, plots=False)
+            with folder as where:
+                outcome = run_model(model, Path(where), progress=False, plots=False)
         except ConvergenceError as error:
             if "tangential equilibrium is lost" in str(error):
                 return AmplitudeRun(amplitude_mm, "loosening", {"note": "the CW slides off: tangential equilibrium lost"})
@@ -122,13 +144,16 @@ def find_limit(scene_path, low_mm: float, high_mm: float, *, tolerance_mm: float
                overrides: dict | None = None, cache_dir=None, out_dir=None, scheduler: str | None = None,
                workers: int | None = None, progress: bool = True) -> LimitResult:
     """Bracket and narrow the stick limit of the wing amplitude on [low_mm, high_mm] (module doc)."""
+    from dask.system import cpu_count
+
     from pipelines.distributed import cluster, map_cases
 
+    coupled_scene(scene_path, overrides)  # bad input is said before any run
     if not 0 < low_mm < high_mm:
         raise InputError("amplitude range needs 0 < low < high")
     if tolerance_mm <= 0:
         raise InputError("the limit tolerance must be positive")
-    parallel = max(1, workers if workers else (_default_workers() if scheduler is None else 2))
+    parallel = max(1, workers if workers else (cpu_count() if scheduler is None else 2))
     if workers == 0:
         return _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out_dir,
                        {"scheduler": None, "workers": 0}, 1, progress, map_cases)
@@ -169,12 +194,6 @@ def _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out
         lower = float(max(safe, default=lower))
         upper = float(min([a for a in unsafe if a > lower], default=upper))
     return LimitResult(lower, (lower, upper), tolerance_mm, list(runs.values()))
-
-
-def _default_workers() -> int:
-    import os
-
-    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
 
 
 def plot_limit(result: LimitResult, path: Path, title: str) -> Path:

@@ -81,19 +81,25 @@ def margin_sweep(scene_path, speeds, *, amplitude_range_mm, tolerance_mm, cache_
     speeds = np.asarray(speeds, dtype=float)
     sweep = speed_sweep(multibody_params(scene), speeds, path=sweep_path, progress=progress,
                         scheduler=scheduler, workers=workers)
-    counterweight = scene.data["coupling"].get("counterweight", 1) - 1
-    factor = calibration_factor(scene, cache)
-    amplitude = factor * sweep.wing_amplitude[:, counterweight]
-    top_speed = float(speeds.max())
-    limit_overrides = dict(overrides or {}, **{"mbs.speed_rpm": top_speed})
+    limit_overrides = dict(overrides or {}, **{"mbs.speed_rpm": float(speeds.max())})
     limit = find_limit(scene_path, *amplitude_range_mm, tolerance_mm=tolerance_mm, overrides=limit_overrides,
                        cache_dir=cache_dir, out_dir=out_dir, scheduler=scheduler, workers=workers, progress=progress)
-    margin = (np.full_like(amplitude, np.nan) if limit.limit_mm is None
-              else np.divide(limit.limit_mm, amplitude, out=np.full_like(amplitude, np.inf), where=amplitude > 0))
-    result = MarginResult(speeds, amplitude, factor, limit, margin, top_speed)
+    result = margins_of(scene, sweep, limit, cache)
     if sweep_path is not None:
         write_margins(sweep_path, result)
     return result, sweep
+
+
+def margins_of(scene, sweep, limit: LimitResult, cache) -> MarginResult:
+    """Calibrated wing amplitude of the scene's CW per sweep speed and margin = limit / amplitude
+    (the limit searched at the highest sweep speed)."""
+    counterweight = scene.data["coupling"].get("counterweight", 1) - 1
+    factor = calibration_factor(scene, cache)
+    amplitude = factor * sweep.wing_amplitude[:, counterweight]
+    margin = (np.full_like(amplitude, np.nan) if limit.limit_mm is None
+              else np.divide(limit.limit_mm, amplitude, out=np.full_like(amplitude, np.inf), where=amplitude > 0))
+    speeds = np.asarray(sweep.speeds_rpm, dtype=float)
+    return MarginResult(speeds, amplitude, factor, limit, margin, float(speeds.max()))
 
 
 def write_margins(path, result: MarginResult) -> None:
