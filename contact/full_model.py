@@ -23,9 +23,9 @@ import scipy.sparse.linalg as spla
 
 from contact.assembly import Body, component_names, control_patterns, pair_with_gap
 from contact.interface import Pairing, kinematic_operator, surface_from_facets
-from contact.law import ContactLaw, ContactState, Response, advance, evaluate, wear_increment
+from contact.law import ContactLaw, ContactState, Response, evaluate
 from contact.linear import tangent_blocks
-from contact.solver import ConvergenceError, Effects, IncrementStats, NewtonSettings
+from contact.solver import Effects, IncrementStats, NewtonSettings, advance_with_cutbacks
 from reduction import pardiso
 from reduction.coupling import rigid_couplings
 from reduction.errors import InputError
@@ -294,31 +294,10 @@ class FullModelSolver:
         stats.iterations += settings.max_iterations
         return None
 
+    def _failure_reason(self) -> str:
+        return "Newton did not converge on the full model"
+
     def increment(self, start: FullEquilibrium, state: ContactState, amplitudes: np.ndarray,
                   effects: Effects) -> tuple[FullEquilibrium, ContactState, np.ndarray, IncrementStats]:
-        """Advance to the load ``amplitudes`` with cutbacks, as :meth:`ContactSolver.increment`."""
-        stats = IncrementStats()
-        targets = [(np.asarray(amplitudes, dtype=float), 0)]
-        equilibrium, status = start, None
-        while targets:
-            target, level = targets[-1]
-            solved = self._solve_to(equilibrium, state, target, stats)
-            too_much_wear = False
-            if solved is not None and effects.wear and np.isfinite(self.settings.wear_cap):
-                wear_now = wear_increment(solved[1], self.law, effects.cycle_jump).sum(axis=0)
-                too_much_wear = float(wear_now.max(initial=0.0)) > self.settings.wear_cap
-            if solved is None or too_much_wear:
-                if level >= self.settings.max_cutbacks:
-                    reason = (f"the wear increment stays above the cap {self.settings.wear_cap:g} mm"
-                              if too_much_wear else "Newton did not converge on the full model")
-                    raise ConvergenceError(f"increment failed after {level} cutbacks: {reason}")
-                stats.cutbacks += 1
-                targets[-1] = (target, level + 1)
-                targets.append((0.5 * (equilibrium.amplitudes + target), level + 1))
-                continue
-            equilibrium, response = solved
-            state, status = advance(state, response, self.law, cof_evolution=effects.cof_evolution,
-                                    wear=effects.wear, cycle_jump=effects.cycle_jump)
-            stats.substeps += 1
-            targets.pop()
-        return equilibrium, state, status, stats
+        """Advance to the load ``amplitudes`` through the sub-steps of :meth:`ContactSolver.increment`."""
+        return advance_with_cutbacks(self, start, state, amplitudes, effects)

@@ -294,42 +294,50 @@ class ContactSolver:
         point status and the iteration counters. Raises :class:`ConvergenceError` when a
         sub-step of that smallest size still fails.
         """
-        stats = IncrementStats()
-        origin, target = start.amplitudes, np.asarray(amplitudes, dtype=float)
-        equilibrium, status = start, None
-        done, level = 0.0, 0  # fraction of the increment solved; sub-step size 2^-level
-        streak = 0  # sub-steps solved in a row at this size
-        while done < 1.0:
-            reach = min(1.0, done + 0.5 ** level)
-            sub_target = target if reach == 1.0 else origin + reach * (target - origin)
-            solved = self._solve_to(equilibrium, state, sub_target, stats)
-            too_much_wear = False
-            if solved is not None and effects.wear and np.isfinite(self.settings.wear_cap):
-                wear_now = wear_increment(solved[1], self.law, effects.cycle_jump).sum(axis=0)
-                too_much_wear = float(wear_now.max(initial=0.0)) > self.settings.wear_cap
-            if solved is None or too_much_wear:
-                if level >= self.settings.max_cutbacks:
-                    reason = (f"the wear increment stays above the cap {self.settings.wear_cap:g} mm "
-                              f"({float(wear_now.max()):.3g} mm in the smallest sub-step); wear that "
-                              "does not shrink with the step makes the interface slip by itself "
-                              "(explicit wear is unstable at this cycle jump): lower the cycle "
-                              f"jump ({effects.cycle_jump:g}) or the wear coefficients, or raise "
-                              "the cap" if too_much_wear else self._failure_reason())
-                    raise ConvergenceError(
-                        f"increment to amplitudes {np.round(amplitudes, 6).tolist()} failed with "
-                        f"sub-steps of 2^-{level} of it ({stats.cutbacks} cutbacks), the last "
-                        f"converged amplitudes being {np.round(equilibrium.amplitudes, 6).tolist()}: "
-                        f"{reason}")
-                stats.cutbacks += 1
-                level += 1
-                streak = 0
-                continue
-            equilibrium, response = solved
-            state, status = advance(state, response, self.law, cof_evolution=effects.cof_evolution,
-                                    wear=effects.wear, cycle_jump=effects.cycle_jump)
-            stats.substeps += 1
-            done = reach
-            streak += 1
-            if streak == 2:
-                level, streak = max(level - 1, 0), 0
-        return equilibrium, state, status, stats
+        return advance_with_cutbacks(self, start, state, amplitudes, effects)
+
+
+def advance_with_cutbacks(solver, start, state: ContactState, amplitudes: np.ndarray, effects: Effects):
+    """The sub-stepping of :meth:`ContactSolver.increment`, for any solver with ``law``,
+    ``settings``, ``_solve_to(equilibrium, state, target, stats)`` (→ (equilibrium, response)
+    or None) and ``_failure_reason()``: the condensed solver and the full reference model
+    advance through the same sub-steps."""
+    stats = IncrementStats()
+    origin, target = start.amplitudes, np.asarray(amplitudes, dtype=float)
+    equilibrium, status = start, None
+    done, level = 0.0, 0  # fraction of the increment solved; sub-step size 2^-level
+    streak = 0  # sub-steps solved in a row at this size
+    while done < 1.0:
+        reach = min(1.0, done + 0.5 ** level)
+        sub_target = target if reach == 1.0 else origin + reach * (target - origin)
+        solved = solver._solve_to(equilibrium, state, sub_target, stats)
+        too_much_wear = False
+        if solved is not None and effects.wear and np.isfinite(solver.settings.wear_cap):
+            wear_now = wear_increment(solved[1], solver.law, effects.cycle_jump).sum(axis=0)
+            too_much_wear = float(wear_now.max(initial=0.0)) > solver.settings.wear_cap
+        if solved is None or too_much_wear:
+            if level >= solver.settings.max_cutbacks:
+                reason = (f"the wear increment stays above the cap {solver.settings.wear_cap:g} mm "
+                          f"({float(wear_now.max()):.3g} mm in the smallest sub-step); wear that "
+                          "does not shrink with the step makes the interface slip by itself "
+                          "(explicit wear is unstable at this cycle jump): lower the cycle "
+                          f"jump ({effects.cycle_jump:g}) or the wear coefficients, or raise "
+                          "the cap" if too_much_wear else solver._failure_reason())
+                raise ConvergenceError(
+                    f"increment to amplitudes {np.round(amplitudes, 6).tolist()} failed with "
+                    f"sub-steps of 2^-{level} of it ({stats.cutbacks} cutbacks), the last "
+                    f"converged amplitudes being {np.round(equilibrium.amplitudes, 6).tolist()}: "
+                    f"{reason}")
+            stats.cutbacks += 1
+            level += 1
+            streak = 0
+            continue
+        equilibrium, response = solved
+        state, status = advance(state, response, solver.law, cof_evolution=effects.cof_evolution,
+                                wear=effects.wear, cycle_jump=effects.cycle_jump)
+        stats.substeps += 1
+        done = reach
+        streak += 1
+        if streak == 2:
+            level, streak = max(level - 1, 0), 0
+    return equilibrium, state, status, stats
