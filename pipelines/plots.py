@@ -62,8 +62,11 @@ def _path_plot(coordinates, final, names, a, b, title, out_dir) -> Path:
         ax.grid(alpha=0.3)
     np.atleast_1d(axes)[-1].set_xlabel(f"{'xyz'[a]} along {'xyz'[b]} = {line_value:g} mm [mm]")
     fig.suptitle(f"{title}: fields along the path through the middle")
+    return _save(fig, out_dir / "path.png")
+
+
+def _save(fig, target: Path) -> Path:
     fig.tight_layout()
-    target = out_dir / "path.png"
     fig.savefig(target, dpi=130)
     plt.close(fig)
     return target
@@ -77,10 +80,7 @@ def _map(mesh, value, name, a, b, title, target) -> Path:
     ax.set_xlabel(f"{'xyz'[a]} [mm]")
     ax.set_ylabel(f"{'xyz'[b]} [mm]")
     ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    fig.savefig(target, dpi=130)
-    plt.close(fig)
-    return target
+    return _save(fig, target)
 
 
 def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
@@ -109,11 +109,7 @@ def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
                 ax.grid(alpha=0.3)
             np.atleast_1d(axes)[-1].set_xlabel("position along the contact x [mm]")
             fig.suptitle(f"{title}: interface fields")
-            fig.tight_layout()
-            target = out_dir / "fields.png"
-            fig.savefig(target, dpi=130)
-            plt.close(fig)
-            written.append(target)
+            written.append(_save(fig, out_dir / "fields.png"))
         else:
             a, b = _plane_axes(coordinates)
             written.append(_path_plot(coordinates, final, names, a, b, title, out_dir))
@@ -170,9 +166,5 @@ def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
                 label += f" (wear phase: each stands for {jump:g} real cycles; {equivalent[-1]:g} in all)"
             axes[-1].set_xlabel(label)
             fig.suptitle(f"{title}: contact condition over cycles")
-            fig.tight_layout()
-            target = out_dir / "cycles.png"
-            fig.savefig(target, dpi=130)
-            plt.close(fig)
-            written.append(target)
+            written.append(_save(fig, out_dir / "cycles.png"))
     return written
