@@ -154,7 +154,8 @@ def cmd_sweep(args) -> int:
         print(f"{'rpm':>8} {'wing µm':>9} {'margin':>8}")
         for speed, amplitude, margin in zip(result.speeds_rpm, result.wing_amplitude_mm, result.margin):
             print(f"{speed:8.1f} {1e3 * amplitude:9.1f} {margin:8.2f}" + ("  < 1: NOT SAFE" if margin < 1 else ""))
-        print(f"amplitude limit {summary['limit_um']} µm (searched at {result.limit_speed_rpm:.0f} rpm); "
+        limit = "below the searched range" if summary["limit_um"] is None else f"{summary['limit_um']:.1f} µm"
+        print(f"amplitude limit {limit} (searched at {result.limit_speed_rpm:.0f} rpm); "
               f"calibration factor {result.calibration:.4g}")
         print(f"results: {out}, plot: {plot}")
     return 0
