@@ -15,14 +15,16 @@ preconditioned with a dense single-precision LU of an earlier Jacobian, kept acr
 iterations and increments: between them the closed set rarely changes and the tangent
 changes little, so a few Krylov iterations (each one product with W and one triangular
 solve) replace an O(n³) factorisation. The factor is rebuilt when points close that it does
-not cover, or when the Krylov time lost to its age exceeds what the last rebuild took. The
+not cover, or when the Krylov work lost to its age exceeds what the last rebuild cost. Work
+is counted in floating-point operations, not measured in seconds: a policy driven by the
+clock would make the preconditioner, and so the last digits of every result, depend on
+the machine's load. The
 Newton correction is exact up to the GMRES tolerance; the converged equilibrium is set by
 the solver's residual test, not by this module (the condensed-versus-full test checks it).
 """
 
 from __future__ import annotations
 
-import time
 import weakref
 from dataclasses import dataclass
 
@@ -45,9 +47,11 @@ class KrylovSettings:
     direct_below: closed rows below which the closed block is factorised every iteration.
     relative_tolerance: GMRES stops at ‖J·x − b‖ ≤ this × ‖b‖ (rows in mm).
     fresh_iterations: Krylov iterations a solve needs with a fresh preconditioner. Every
-        iteration beyond it is time lost to an aged one; once that lost time exceeds what the
-        last rebuild took, the preconditioner is rebuilt for the next solve (pay for a
+        iteration beyond it is work lost to an aged one; once that lost work exceeds what the
+        last rebuild cost, the preconditioner is rebuilt for the next solve (pay for a
         rebuild only after having wasted as much: never worse than twice the best policy).
+        Both are counted in flops, not seconds, so that the policy, and the last digits of
+        the results, do not depend on the machine's load.
     max_iterations: Krylov space size; if GMRES has not converged by then, the
         preconditioner is rebuilt from the current tangent and the solve repeated.
     single_precision: factorise the preconditioner and multiply by W in float32 inside
@@ -85,8 +89,8 @@ class NewtonLinearSolver:
         self._W_closed_rows: np.ndarray | None = None
         self._factor = None
         self._stale = True
-        self._rebuild_time = 0.0
-        self._lost_time = 0.0
+        self._rebuild_work = 0.0
+        self._lost_work = 0.0
 
     def solve(self, blocks: np.ndarray, r_kin: np.ndarray, r_ctl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Newton correction (Δg mm, Δq mm) for residuals r_kin (mm) and r_ctl (N)."""
@@ -130,18 +134,17 @@ class NewtonLinearSolver:
 
         if refactor:
             self._refactor(working, closed_blocks, W_cc, E_c)
-        started = time.perf_counter()
         solution, iterations = krylov()
         if solution is not None and iterations > self.settings.fresh_iterations:
-            per_iteration = (time.perf_counter() - started) / iterations
-            self._lost_time += (iterations - self.settings.fresh_iterations) * per_iteration
+            aged = iterations - self.settings.fresh_iterations
+            self._lost_work += aged * _krylov_iteration_flops(closed.size + space.n_control)
         if solution is None:
             self._refactor(working, closed_blocks, W_cc, E_c)
             solution, more = krylov()
             iterations += more
             if solution is None:
                 raise np.linalg.LinAlgError("GMRES did not converge with a fresh preconditioner")
-        self._stale = self._lost_time > self._rebuild_time
+        self._stale = self._lost_work > self._rebuild_work
         self.counters.solves += 1
         self.counters.krylov_iterations += iterations
         delta_q = solution[closed.size:]
@@ -168,7 +171,6 @@ class NewtonLinearSolver:
 
     def _refactor(self, closed_points, closed_blocks, W_cc, E_c) -> None:
         """Dense LU of the bordered closed Jacobian, scaled control rows, built in Fortran order."""
-        started = time.perf_counter()
         dtype = np.float32 if self.settings.single_precision else np.float64
         n_c, m = W_cc.shape[0], self.space.n_control
         dim = closed_blocks.shape[1]
@@ -195,13 +197,25 @@ class NewtonLinearSolver:
         self._factor = la.lu_factor(matrix, overwrite_a=True, check_finite=False)
         self._closed_key = closed_points
         self._stale = False
-        self._rebuild_time = time.perf_counter() - started
-        self._lost_time = 0.0
+        self._rebuild_work = _rebuild_flops(n_c + m)
+        self._lost_work = 0.0
         self.counters.factorisations += 1
 
     def _precondition(self, vector: np.ndarray) -> np.ndarray:
         lu, pivots = self._factor
         return la.lu_solve((lu, pivots), vector.astype(lu.dtype), check_finite=False).astype(float)
+
+
+def _krylov_iteration_flops(size: int) -> float:
+    """One preconditioned Krylov iteration on ``size`` rows: a product with the dense
+    Jacobian and two triangular solves, each about 2·size² flops."""
+    return 4.0 * size**2
+
+
+def _rebuild_flops(size: int) -> float:
+    """Forming (2·size²·dim, bounded by 6·size²) and LU-factorising (2/3·size³) the dense
+    bordered Jacobian of ``size`` rows."""
+    return 2.0 / 3.0 * size**3 + 6.0 * size**2
 
 
 def _gmres(matvec, precondition, rhs: np.ndarray, tolerance: float, max_iterations: int):
