@@ -19,7 +19,6 @@ and draws progress bars. Units: mm, N, MPa, mJ.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -269,7 +268,6 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
     observer = observer or Observer()
     law = solver.law
     area = solver.area
-    clock = time.perf_counter()
     bolts = solver.space.structure.bolts
 
     def bolt_forces(eq):
@@ -399,7 +397,6 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
     figures["cycles_run"] = cycle_number
     figures["equivalent_cycles"] = equivalent
     figures["nominal_contact_area"] = nominal_area
-    figures["wall_time_s"] = time.perf_counter() - clock
     if bolts is not None:
         final_clamp = history[-1].clamp_force
         figures["bolt_force_initial_N"] = initial_clamp

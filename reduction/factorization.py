@@ -8,6 +8,7 @@ preferred, then CHOLMOD, then SuperLU, with one warning when PARDISO is missing.
 
 from __future__ import annotations
 
+import os
 import warnings
 from dataclasses import dataclass
 from typing import Callable
@@ -43,8 +44,20 @@ def solver_available(name: str) -> bool:
     return {"pardiso": pardiso.available, "cholmod": cholmod_available, "splu": lambda: True}[name]()
 
 
+#: Environment variable that names the solver "auto" stands for (e.g. to compare backends).
+SOLVER_VARIABLE = "FRETWORK_SPARSE_SOLVER"
+
+
 def resolve_solver(solver: str) -> str:
-    """Name of the solver to use for "auto" (warns once when PARDISO is missing), else checks the name."""
+    """Name of the solver to use for "auto" (warns once when PARDISO is missing), else checks the name.
+
+    "auto" is ``$FRETWORK_SPARSE_SOLVER`` when set, else the fastest installed solver.
+    """
+    if solver == "auto" and os.environ.get(SOLVER_VARIABLE, "auto") != "auto":
+        solver = os.environ[SOLVER_VARIABLE]
+        if solver not in SOLVERS or not solver_available(solver):
+            raise InputError(f"{SOLVER_VARIABLE}={solver} is not an installed solver; "
+                             f"choose auto or one of {', '.join(s for s in SOLVERS if solver_available(s))}")
     if solver not in ("auto", *SOLVERS):
         raise InputError(f"unknown solver '{solver}'; choose auto, {', '.join(SOLVERS)}")
     if solver != "auto":

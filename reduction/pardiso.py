@@ -9,6 +9,7 @@ Cholesky factor for repeated solves. Matrix type 2 (real symmetric positive defi
 from __future__ import annotations
 
 import ctypes
+import os
 import weakref
 from functools import lru_cache
 
@@ -36,6 +37,11 @@ def available() -> bool:
 
 @lru_cache(maxsize=1)
 def _library():
+    # MKL's conditional numerical reproducibility, read once when MKL loads: without it MKL
+    # may pick code paths by the alignment of the arrays it is given, run by run. AUTO keeps
+    # the fastest path for this CPU; a user's own MKL_CBWR (e.g. COMPATIBLE, for the same bits
+    # across CPU models) is left as it is.
+    os.environ.setdefault("MKL_CBWR", "AUTO")
     from pypardiso.pardiso_wrapper import PyPardisoSolver
 
     function = PyPardisoSolver().libmkl.pardiso

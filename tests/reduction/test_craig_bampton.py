@@ -71,7 +71,10 @@ def test_statics_at_interface_are_exact_without_any_modes(cantilever):
     full = np.zeros(k.shape[0])
     full[free] = spla.spsolve(k[free][:, free].tocsc(), load[free])
     q = np.linalg.solve(cb.stiffness, cb.basis.T @ load)
-    np.testing.assert_allclose(q[: cb.n_interface], full[interface], rtol=1e-8, atol=1e-12)
+    # Components that vanish in exact arithmetic (here -1.5e-12 against -3.4e-12 mm beside
+    # 0.69 mm) are judged against the interface motion's size, not against round-off.
+    interface_scale = np.abs(full[interface]).max()
+    np.testing.assert_allclose(q[: cb.n_interface], full[interface], rtol=1e-8, atol=1e-10 * interface_scale)
     np.testing.assert_allclose(q[cb.n_interface:], 0.0, atol=1e-12 * np.abs(q).max())
     np.testing.assert_allclose(cb.expand(q), full, rtol=1e-8, atol=1e-10 * np.abs(full).max())
 
@@ -80,7 +83,8 @@ def test_normal_modes_are_mass_normalised_and_vanish_at_interface(cantilever):
     k, m, interface, fixed, _ = cantilever
     cb = craig_bampton(k, m, interface, n_modes=5, fixed=fixed)
     np.testing.assert_allclose(cb.mass[6:, 6:], np.eye(5), atol=1e-9)
-    np.testing.assert_allclose(cb.stiffness[6:, 6:], np.diag(cb.fixed_interface_eigenvalues), rtol=1e-9)
+    eigenvalues = cb.fixed_interface_eigenvalues
+    np.testing.assert_allclose(cb.stiffness[6:, 6:], np.diag(eigenvalues), rtol=1e-9, atol=1e-10 * eigenvalues.max())
     assert np.abs(cb.normal_modes[interface]).max() == 0.0
     assert np.all(np.diff(cb.fixed_interface_frequencies_hz) >= 0)
 

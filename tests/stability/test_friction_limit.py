@@ -9,7 +9,6 @@
   ConvergenceError, quickly, and never return a spurious answer.
 """
 
-import time
 
 import numpy as np
 import pytest
@@ -137,13 +136,13 @@ def test_force_control_reversal_near_the_limit_3d(record_property):
     assert abs(watchdog.energy_error) < ENERGY_TOLERANCE
 
 
-def _assert_clear_failure(case, rows, limit_seconds):
+def _assert_clear_failure(case, rows):
+    """The overload ends in the named failure. How long it takes to say so is bounded by the
+    solver's attempts (NewtonSettings.max_iterations per sub-step, max_cutbacks halvings), not
+    timed here: the machine is shared, and a wall-clock bound would judge its load."""
     watchdog = Watchdog(case, max_cutbacks=0)
-    start = time.perf_counter()
     with pytest.raises(ConvergenceError, match="tangential equilibrium is lost") as failure:
         drive(case, rows, watchdog)
-    elapsed = time.perf_counter() - start
-    assert elapsed < limit_seconds, f"the failure took {elapsed:.1f} s to report"
     message = str(failure.value)
     assert "exceeds what friction can carry" in message
     assert "prescribe a motion" in message
@@ -155,7 +154,7 @@ def test_force_control_past_the_limit_reports_lost_equilibrium_2d(overload, reco
     case = cylinder(tangential="force", tangential_value=COF * LINE_LOAD)
     rows = np.vstack([preload(case), case.amplitudes(normal=1, tangential=0.9),
                       case.amplitudes(normal=1, tangential=overload)])
-    watchdog, message = _assert_clear_failure(case, rows, limit_seconds=60.0)
+    watchdog, message = _assert_clear_failure(case, rows)
     record_property("outcome", {**watchdog.summary(), "message": message})
     # Every increment before the overload converged and was checked.
     assert watchdog.increments == 11
@@ -168,6 +167,6 @@ def test_force_control_past_the_limit_reports_lost_equilibrium_3d(points_per_sid
     case = flat(points_per_side, tangential="force", cof0=0.2)
     force = 100.0 * 10.0 * 10.0
     rows = np.array([[force, 0.0], [force, 0.15 * force], [force, 0.25 * force]])
-    watchdog, message = _assert_clear_failure(case, rows, limit_seconds=60.0)
+    watchdog, message = _assert_clear_failure(case, rows)
     record_property("outcome", {**watchdog.summary(), "message": message})
     assert watchdog.increments == 2
