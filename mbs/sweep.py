@@ -1,7 +1,7 @@
 """Engine-speed sweep: wing amplitude and dominant frequencies per speed, resonance crossings.
 
 Each speed is one fixed-step run of the model plus the coupled eigenfrequencies at that speed,
-run as an independent case on dask (pipelines.distributed: an embedded local cluster by default,
+run as an independent case on dask (pipelines.parallel: an embedded local cluster by default,
 an existing one with `scheduler`, in this process with workers=0). The CW (and flexible-throw)
 reduction is done once on the client and sent to every worker once: re-reducing on each worker
 cost more (see tests/bench/test_bench_distributed.py). The first half of
@@ -28,7 +28,7 @@ from mbs.model import SimulationError, simulate, system_eigenfrequencies
 from mbs.parameters import ModelParams
 from mbs.results import FORMAT, FORMAT_VERSION, write_campbell
 from mbs.spectra import amplitude_spectrum, dominant_frequencies
-from pipelines.distributed import map_cases
+from pipelines.parallel import map_cases
 from reduction.errors import InputError
 
 #: Number of dominant frequencies recorded per speed and number of system modes kept.
@@ -133,7 +133,7 @@ def speed_sweep(model_params: ModelParams, speeds, *, path=None, progress: bool 
 
     path: optional HDF5 file for the whole sweep (group /sweep, Campbell in /campbell), written
     here, by the client. progress: a bar over the finished speeds on stderr.
-    scheduler, workers: where the speeds run (pipelines.distributed.map_cases): None, None is an
+    scheduler, workers: where the speeds run (pipelines.parallel.map_cases): None, None is an
     embedded local cluster with one worker per core; workers=0 runs them in this process.
     """
     speeds = np.asarray(speeds, dtype=float)

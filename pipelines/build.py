@@ -19,7 +19,7 @@ from contact.procedure import LoadProgram, Procedure
 from contact.solver import NewtonSettings
 from contact.tabulated import TabulatedProgram
 from pipelines import coupling as coupling_
-from pipelines import meshes
+from reduction.mesh import generators as meshes
 from pipelines.scene import MULTIBODY_EFFECTS, Scene
 from pipelines.stages import StageCache
 from reduction.body_loads import centrifugal, gravity
@@ -137,7 +137,7 @@ def coupled_program(model: "Model", wing_amplitude: float | None = None) -> "Mod
 
 def select_points(coordinates: np.ndarray, selection: dict, where: str, sets=None) -> np.ndarray:
     """Boolean mask of points (n, dim): a named node set of the mesh file (``sets``, a
-    :class:`reduction.mesh_io.MeshModel`), a box, a union of boxes, a ring or a plane (mm,
+    :class:`reduction.mesh.io.MeshModel`), a box, a union of boxes, a ring or a plane (mm,
     tolerance 1e-6·size)."""
     if "set" in selection:
         if sets is None:
@@ -195,9 +195,9 @@ def make_mesh(spec: dict, where: str, base: Path | None):
     if base is not None and not path.is_absolute():
         path = base / path
     try:
-        from reduction.mesh_io import read_mesh
+        from reduction.mesh.io import read_mesh
     except ImportError:
-        raise InputError(f"'{where}.file': reading mesh files needs reduction.mesh_io, "
+        raise InputError(f"'{where}.file': reading mesh files needs reduction.mesh.io, "
                          "which is not available in this installation") from None
     if not path.is_file():
         raise InputError(f"'{where}.file': {path} does not exist")

@@ -8,10 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipelines import coupling, limit as limits, scene as scenes, stages
+from pipelines import coupling, scene as scenes, stages
+from pipelines.jobs import limit as limits
 from pipelines.build import build, multibody_loading
-from pipelines.cli import main
-from pipelines.meshes import counterweight_block, web_block
+from pipelines.cli.main import main
+from reduction.mesh.generators import counterweight_block, web_block
 from reduction.elasticity import assemble_elastic_body
 from reduction.errors import InputError
 from reduction.factorization import factorize

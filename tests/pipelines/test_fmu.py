@@ -14,7 +14,7 @@ import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from pipelines.fmu import (
+from pipelines.fmu.export import (
     SourceOnlyFmuWarning,
     add_export_fmu_parser,
     export_fmu,

@@ -2,7 +2,7 @@
 
 import pytest
 
-from pipelines.validate import run_validation
+from pipelines.jobs.validate import run_validation
 
 
 @pytest.fixture(scope="module")

@@ -2,7 +2,7 @@
 
 For each engine speed the multibody model gives the wing amplitude (half the peak-to-peak wing
 torsion of the scene's counterweight); the margin is amplitude limit / wing amplitude, where
-the limit comes from :func:`pipelines.limit.find_limit` on the coupled scene. A margin below
+the limit comes from :func:`pipelines.jobs.limit.find_limit` on the coupled scene. A margin below
 1 means the joint does not stay stuck at that speed.
 
 Calibration: when the scene states its wing amplitude (``coupling.wing_amplitude``, e.g. a
@@ -23,7 +23,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from pipelines.limit import LimitResult, find_limit
+from pipelines.jobs.limit import LimitResult, find_limit
 from reduction.errors import InputError
 
 

@@ -36,7 +36,7 @@ installed): the contact-space systems are small and dense, and two OpenBLAS thre
 depend on the neighbours instead of the settings.
 
 The reference and the one-knob runs do not depend on each other: they run as one round of
-parallel cases (pipelines.distributed: an embedded local cluster, or ``scheduler``; workers=0
+parallel cases (pipelines.parallel: an embedded local cluster, or ``scheduler``; workers=0
 runs them in this process). The combinations follow one at a time, each depending on the last.
 Every run is the same computation wherever it runs, so the records do not depend on where.
 """
@@ -66,7 +66,7 @@ from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from pipelines import scene as scenes
 from pipelines.build import build, make_mesh
-from pipelines.distributed import add_cluster_arguments, map_cases
+from pipelines.parallel import add_cluster_arguments, map_cases
 from reduction.errors import InputError
 
 TOLERANCE = 0.02
@@ -360,7 +360,7 @@ def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: di
     overrides: scene overrides applied to every run ("procedure.cof_cycles": 10, ...), after the
     study's cycle caps (wear ≤ 20, COF ≤ 40 cycles; quick: ≤ 4 and ≤ 10, two values per knob).
     sweeps: knob name → values replacing its default sweep. on_run: called with each record.
-    scheduler, workers: where the independent runs go (pipelines.distributed.map_cases).
+    scheduler, workers: where the independent runs go (pipelines.parallel.map_cases).
     """
     scene_path = Path(scene_path)
     cluster = {"scheduler": scheduler, "workers": workers}

@@ -11,8 +11,6 @@ import numpy as np
 
 from reduction.errors import InputError
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-
 
 def _json(value) -> str:
     return json.dumps(value, indent=2, default=float)
@@ -32,7 +30,7 @@ def _add_cache_arguments(parser) -> None:
 
 def cmd_run(args) -> int:
     from pipelines import scene
-    from pipelines.run import run_scene
+    from pipelines.jobs.run import run_scene
     from pipelines.stages import StageCache
 
     loaded = scene.load(args.scene)
@@ -76,7 +74,7 @@ def _human_summary(outcome) -> str:
 
 
 def cmd_validate(args) -> int:
-    from pipelines.validate import run_validation
+    from pipelines.jobs.validate import run_validation
 
     records = run_validation(quick=args.quick, out_dir=Path(args.out), progress=not args.json)
     if args.json:
@@ -90,7 +88,7 @@ def cmd_validate(args) -> int:
 
 
 def cmd_demo(args) -> int:
-    from pipelines.demo import describe, run_demo
+    from pipelines.jobs.demo import describe, run_demo
 
     result = run_demo(args.out, cache_dir=_cache(args), workers=args.workers, progress=not args.quiet)
     print(_json({"summary": result.summary, "stage_times_s": result.stage_times, "files": result.files})
@@ -99,7 +97,7 @@ def cmd_demo(args) -> int:
 
 
 def cmd_limit(args) -> int:
-    from pipelines.limit import coupled_scene, find_limit, parse_range_um, plot_limit, write_limit
+    from pipelines.jobs.limit import coupled_scene, find_limit, parse_range_um, plot_limit, write_limit
 
     low, high = parse_range_um(args.amplitude)
     if args.tolerance <= 0:
@@ -134,8 +132,8 @@ def cmd_sweep(args) -> int:
     if not args.margins:
         return args.multibody_handler(args)
     from mbs.sweep import parse_speeds
-    from pipelines.limit import parse_range_um
-    from pipelines.margins import margin_sweep, plot_margins
+    from pipelines.jobs.limit import parse_range_um
+    from pipelines.jobs.margins import margin_sweep, plot_margins
     from pipelines import scene as scenes
 
     speeds = parse_speeds(args.speeds)
@@ -179,7 +177,7 @@ def cmd_reduce(args) -> int:
 
 
 def cmd_study(args) -> int:
-    from pipelines.studies import constant_cof_comparison
+    from pipelines.studies.constant_cof import constant_cof_comparison
 
     probes = {f"P{k + 1}": [float(v) for v in p.split(",")] for k, p in enumerate(args.probe)}
     records = constant_cof_comparison(args.scene, probes)
@@ -229,7 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
     limit.add_argument("--json", action="store_true")
     limit.add_argument("--quiet", action="store_true")
     _add_cache_arguments(limit)
-    from pipelines.distributed import add_cluster_arguments
+    from pipelines.parallel import add_cluster_arguments
     add_cluster_arguments(limit)
     limit.set_defaults(func=cmd_limit)
     reduce = sub.add_parser("reduce", help="accuracy of a Craig-Bampton reduction of a mesh")
@@ -251,10 +249,10 @@ def build_parser() -> argparse.ArgumentParser:
                           help="probe point 'x,y[,z]' in mm (repeat; paper's P1, P2)")
     constant.add_argument("--json", action="store_true")
     constant.set_defaults(func=cmd_study)
-    from pipelines.accuracy import add_accuracy_parser
+    from pipelines.studies.accuracy import add_accuracy_parser
     add_accuracy_parser(kinds)
-    from mbs.cli import add_run_parser, add_sweep_parser
-    from pipelines.fmu import add_export_fmu_parser
+    from pipelines.cli.mbs import add_run_parser, add_sweep_parser
+    from pipelines.fmu.export import add_export_fmu_parser
     add_export_fmu_parser(sub)
     sweep = add_sweep_parser(sub)
     sweep.add_argument("--margins", action="store_true",

@@ -1,6 +1,6 @@
 """Export load histories as co-simulation FMUs that other simulation tools play back.
 
-The FMU holds a small generic C player (``pipelines/fmu_template``) and the sampled
+The FMU holds a small generic C player (``pipelines/fmu/template``) and the sampled
 histories as a binary table in ``resources/histories.bin``; the player interpolates
 linearly between samples. One compiled player serves every export, so the FMU grows
 only with the data (8 bytes per sample and signal, before zip compression).
@@ -40,12 +40,12 @@ import numpy as np
 
 from reduction.errors import InputError
 
-TEMPLATE_DIR = Path(__file__).parent / "fmu_template"
+TEMPLATE_DIR = Path(__file__).parent / "template"
 TABLE_FILE = "histories.bin"
 TABLE_MAGIC = b"FRETHIS1"
 TOKEN_SIZE = 64
 
-# Value references, mirrored in fmu_template/player.h.
+# Value references, mirrored in template/player.h.
 VR_TIME = 0
 VR_TIME_OFFSET = 1
 VR_PERIOD = 2
@@ -329,7 +329,7 @@ def instantiation_token(table: PlaybackTable) -> str:
 
 
 def write_table(path: Path, table: PlaybackTable, token: str) -> None:
-    """Write the binary table the C player reads (layout in fmu_template/player.c)."""
+    """Write the binary table the C player reads (layout in template/player.c)."""
     token_bytes = token.encode("ascii")
     if len(token_bytes) >= TOKEN_SIZE:
         raise ValueError(f"instantiation token longer than {TOKEN_SIZE - 1} bytes")
@@ -600,7 +600,7 @@ def run_export_fmu(args: argparse.Namespace) -> int:
 
 
 def main_export(argv: Sequence[str] | None = None) -> int:
-    """Stand-alone entry: ``python -m pipelines.fmu RESULTS.h5 [--signals ...] [--fmi 2|3] -o loads.fmu``."""
+    """Stand-alone entry: ``python -m pipelines.fmu.export RESULTS.h5 [--signals ...] [--fmi 2|3] -o loads.fmu``."""
     parser = argparse.ArgumentParser(prog="fretwork export-fmu", description="Export load histories as an FMU.")
     _configure_parser(parser)
     return run_export_fmu(parser.parse_args(argv))

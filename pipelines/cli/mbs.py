@@ -20,7 +20,7 @@ from mbs.plots import plot_campbell, plot_sweep
 from mbs.run import run_model
 from mbs.scene import load_model_params
 from mbs.sweep import parse_speeds, speed_sweep
-from pipelines.distributed import add_cluster_arguments
+from pipelines.parallel import add_cluster_arguments
 from reduction.errors import InputError
 
 

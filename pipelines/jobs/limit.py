@@ -9,7 +9,7 @@ safer verdict. It evaluates the ends of the range first, then narrows the bracke
 [largest stuck amplitude, smallest amplitude that is not stuck] in rounds of as many
 amplitudes as there are workers (one worker: bisection), until the bracket is no wider than
 the tolerance. The limit reported is the bracket's lower end: an amplitude that was run and
-found stuck. Runs are independent cases (:func:`pipelines.distributed.map_cases`) and each
+found stuck. Runs are independent cases (:func:`pipelines.parallel.map_cases`) and each
 is cached (stage ``contact_run``), so a repeated or extended search only runs new amplitudes.
 
 Amplitudes in mm internally; the command line takes µm, as engineers quote wing amplitudes.
@@ -113,7 +113,7 @@ def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_d
 
     from contact.solver import ConvergenceError
     from pipelines.build import coupled_program
-    from pipelines.run import run_model
+    from pipelines.jobs.run import run_model
     from pipelines.stages import StageCache
 
     scene = coupled_scene(scene_path, overrides)
@@ -146,7 +146,7 @@ def find_limit(scene_path, low_mm: float, high_mm: float, *, tolerance_mm: float
     """Bracket and narrow the stick limit of the wing amplitude on [low_mm, high_mm] (module doc)."""
     from dask.system import cpu_count
 
-    from pipelines.distributed import cluster, map_cases
+    from pipelines.parallel import cluster, map_cases
 
     coupled_scene(scene_path, overrides)  # bad input is said before any run
     if not 0 < low_mm < high_mm:

@@ -12,9 +12,9 @@ from contact import procedure
 from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from pipelines.build import Model, build
-from pipelines.paraview import write_final_vtu, write_interface_series
-from pipelines.plots import plot_results
-from pipelines.results import ResultsWriter
+from pipelines.output.paraview import write_final_vtu, write_interface_series
+from pipelines.output.plots import plot_results
+from pipelines.output.results import ResultsWriter
 from pipelines.scene import Scene
 from pipelines.stages import StageCache
 from reduction.errors import InputError
