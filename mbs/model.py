@@ -348,7 +348,10 @@ def _build(params: ModelParams, reduced: ReducedCounterweight, *, loads: bool,
     mbs = system.AddSystem()
     items = _Items()
     if "flexible_crankshaft" in params.effects:
-        _add_flexible_throws(mbs, params, speed, items, reduced_throw or reduce_throw(params.throw))
+        if reduced_throw is None:
+            raise InputError("the flexible_crankshaft effect needs the reduced throw: pass reduced_throw "
+                             "(mbs.model.reduce_bodies reduces both bodies of a model)")
+        _add_flexible_throws(mbs, params, speed, items, reduced_throw)
     else:
         _add_half_throws(mbs, params, speed, items)
     _add_bearings_and_journals(mbs, params, items)
@@ -362,7 +365,16 @@ def _build(params: ModelParams, reduced: ReducedCounterweight, *, loads: bool,
     return system, mbs, items
 
 
-def system_eigenfrequencies(params: ModelParams, reduced: ReducedCounterweight | None = None,
+def reduce_bodies(params: ModelParams) -> tuple[ReducedCounterweight, ReducedThrow | None]:
+    """The reduction stage before every simulation of ``params``: the CW (Craig-Bampton with
+    params.n_modes fixed-interface modes) and, with the "flexible_crankshaft" effect, the throw
+    (else None). A run, a sweep and a coupled scene each call it once and pass the bodies on:
+    nothing in this module reduces a body by itself."""
+    reduced = reduce_counterweight(params.counterweight, params.n_modes)
+    return reduced, (reduce_throw(params.throw) if "flexible_crankshaft" in params.effects else None)
+
+
+def system_eigenfrequencies(params: ModelParams, reduced: ReducedCounterweight,
                             max_frequency: float = 2000.0, *, reduced_throw: ReducedThrow | None = None) -> np.ndarray:
     """Eigenfrequencies (Hz, ascending, up to max_frequency) of the assembled multibody model.
 
@@ -371,7 +383,6 @@ def system_eigenfrequencies(params: ModelParams, reduced: ReducedCounterweight |
     the coupled crank-throw + counterweight modes a run resonates at.
     """
     params.validate()
-    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
     system, mbs, _ = _build(params, reduced, loads=False, reduced_throw=reduced_throw)
     mbs.Assemble()
     frequencies, _ = mbs.ComputeODE2Eigenvalues(convert2Frequencies=True, ignoreAlgebraicEquations=False)
@@ -379,20 +390,19 @@ def system_eigenfrequencies(params: ModelParams, reduced: ReducedCounterweight |
     return frequencies[(frequencies > 1e-3) & (frequencies <= max_frequency)]
 
 
-def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None,
+def simulate(params: ModelParams, *, reduced: ReducedCounterweight,
              initial_modal_coordinates: np.ndarray | None = None, energy: bool = False,
              reduced_throw: ReducedThrow | None = None) -> RunHistories:
     """Run the model at params.speed_rpm for params.solver.revolutions, fixed time step.
 
-    reduced: a precomputed reduced CW (reuse it across a sweep); built from params if None.
+    reduced: the reduced CW (:func:`reduce_bodies`; reuse it across a sweep).
     initial_modal_coordinates: (n_modes,) initial CW modal coordinates (both CWs), e.g. to
     release the torsion mode for a free-decay frequency check. energy: also record the total
     mechanical energy (meaningful with drive="free", damping off and no excitation; rigid throws).
-    reduced_throw: a precomputed Craig-Bampton throw for the "flexible_crankshaft" effect
-    (mbs.flexible_throw.reduce_throw); built from params.throw if None.
+    reduced_throw: the Craig-Bampton throw, required by the "flexible_crankshaft" effect
+    (:func:`reduce_bodies`).
     """
     params.validate()
-    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
     if energy and "flexible_crankshaft" in params.effects:
         raise InputError("energy bookkeeping covers rigid throws only; switch the flexible_crankshaft effect off")
     system, mbs, items = _build(params, reduced, loads=True, initial_modal_coordinates=initial_modal_coordinates,
@@ -428,13 +438,12 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight | None = None
     return collect_histories(mbs, sensors, reduced, energy, wall_time)
 
 
-def _released_torsion_expansion(params: ModelParams, reduced: ReducedCounterweight | None,
+def _released_torsion_expansion(params: ModelParams, reduced: ReducedCounterweight,
                                 reduced_throw: ReducedThrow | None):
     """Undamped eigen-analysis of the assembled model and the expansion x0 = V c of the state in
     which every CW's torsion mode is released by 0.1: (frequencies Hz, V, c, ODE2 index of each
     CW's first modal coordinate, reduced CW)."""
     params.validate()
-    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
     _system, mbs, items = _build(params, reduced, loads=False, reduced_throw=reduced_throw)  # _system owns mbs
     mbs.Assemble()
     frequencies, vectors = mbs.ComputeODE2Eigenvalues(convert2Frequencies=True, ignoreAlgebraicEquations=False)
@@ -446,7 +455,7 @@ def _released_torsion_expansion(params: ModelParams, reduced: ReducedCounterweig
     return frequencies, vectors, participation, first_modal, reduced
 
 
-def torsion_decay_mode(params: ModelParams, reduced: ReducedCounterweight | None = None, *,
+def torsion_decay_mode(params: ModelParams, reduced: ReducedCounterweight, *,
                        reduced_throw: ReducedThrow | None = None) -> tuple[float, float]:
     """Frequency (Hz) and amplitude of the coupled mode that dominates CW 1's torsion coordinate
     when the torsion mode of every CW is released by 0.1 (the free-decay test), from the
@@ -469,7 +478,7 @@ def torsion_decay_mode(params: ModelParams, reduced: ReducedCounterweight | None
     return float(frequencies[dominant]), float(amplitude[dominant])
 
 
-def wing_torsion_decay_components(params: ModelParams, reduced: ReducedCounterweight | None = None, *,
+def wing_torsion_decay_components(params: ModelParams, reduced: ReducedCounterweight, *,
                                   count: int = 4, reduced_throw: ReducedThrow | None = None) -> list[tuple[float, float]]:
     """The ``count`` largest sinusoids of CW 1's wing torsion (u(+x) - u(-x))/2 in the free-decay
     test (every CW's torsion mode released by 0.1, damping and excitation off), as

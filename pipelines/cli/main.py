@@ -131,7 +131,7 @@ def cmd_sweep(args) -> int:
     """`fretwork sweep`: the multibody speed sweep; with --margins also the amplitude limit and the margins."""
     if not args.margins:
         return args.multibody_handler(args)
-    from mbs.sweep import parse_speeds
+    from pipelines.jobs.sweep import parse_speeds
     from pipelines.jobs.limit import parse_range_um
     from pipelines.jobs.margins import margin_sweep, plot_margins
     from pipelines import scene as scenes

@@ -43,9 +43,9 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
              amplitude_range_mm=DEMO_AMPLITUDE_RANGE_MM, tolerance_mm=DEMO_TOLERANCE_MM, cache_dir=None,
              workers=None, progress=True) -> DemoResult:
     """Run the five stages (module doc) into ``out_dir``; returns the summary and stage times (s)."""
-    from mbs.sweep import speed_sweep
+    from pipelines.jobs.sweep import speed_sweep
     from pipelines import scene as scenes
-    from pipelines.build import multibody_params
+    from pipelines.coupling import multibody_params
     from pipelines.jobs.limit import find_limit, plot_limit, write_limit
     from pipelines.jobs.margins import margins_of, plot_margins, write_margins
     from pipelines.jobs.run import run_scene

@@ -123,7 +123,7 @@ def run_scene(scene: Scene, out_dir: str | Path, *, progress: bool = True, plots
     times = {}
     multibody = None
     if "coupling" in scene.data:
-        from pipelines.build import multibody_loading
+        from pipelines.coupling import multibody_loading
 
         clock = time.perf_counter()
         multibody = multibody_loading(scene, cache)

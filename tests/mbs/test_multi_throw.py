@@ -94,7 +94,7 @@ def test_evenly_spaced_throws_by_default_and_angle_tables_must_match_the_throw_c
 
 
 def test_sweep_of_a_two_throw_shaft_reports_every_counterweight():
-    from mbs.sweep import speed_sweep
+    from pipelines.jobs.sweep import speed_sweep
 
     params = ModelParams(n_modes=2, throws=2, effects=frozenset({"gear_mesh"}),
                          solver=SolverParams(revolutions=0.25, time_step=1e-4))

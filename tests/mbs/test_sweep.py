@@ -13,7 +13,7 @@ import mbs.sweep as sweep_module
 from pipelines.cli.mbs import add_sweep_parser
 from mbs.model import SimulationError
 from mbs.parameters import CrankThrowParams, ModelParams, SolverParams
-from mbs.sweep import parse_speeds, speed_sweep
+from pipelines.jobs.sweep import parse_speeds, speed_sweep
 from reduction.errors import InputError
 
 

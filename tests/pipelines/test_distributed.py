@@ -12,7 +12,7 @@ import pytest
 import pipelines.parallel as distributed
 from pipelines.cli.mbs import add_sweep_parser
 from mbs.parameters import ModelParams, SolverParams
-from mbs.sweep import speed_sweep
+from pipelines.jobs.sweep import speed_sweep
 from pipelines.parallel import CaseOutcome, add_cluster_arguments, cluster, map_cases
 from reduction.errors import InputError
 
