@@ -249,10 +249,10 @@ def build_parser() -> argparse.ArgumentParser:
                           help="probe point 'x,y[,z]' in mm (repeat; paper's P1, P2)")
     constant.add_argument("--json", action="store_true")
     constant.set_defaults(func=cmd_study)
-    from pipelines.studies.accuracy import add_accuracy_parser
+    from pipelines.cli.accuracy import add_accuracy_parser
     add_accuracy_parser(kinds)
     from pipelines.cli.mbs import add_run_parser, add_sweep_parser
-    from pipelines.fmu.export import add_export_fmu_parser
+    from pipelines.fmu.cli import add_export_fmu_parser
     add_export_fmu_parser(sub)
     sweep = add_sweep_parser(sub)
     sweep.add_argument("--margins", action="store_true",
