@@ -34,7 +34,8 @@ import numpy as np
 
 from contact.tabulated import TabulatedProgram
 from mbs.loading import CycleLoading, MultibodyLoading, counterweight_loading, cycle_loading
-from pipelines.scene import MULTIBODY_EFFECTS, Scene
+from pipelines.scene import Scene
+from pipelines.scene.schema import MULTIBODY_EFFECTS
 from pipelines.stages import StageCache
 from reduction import modal_loads
 from reduction.errors import InputError
