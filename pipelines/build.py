@@ -17,7 +17,6 @@ from contact.assembly import Assembly, Body, ReferencePoint, assemble
 from contact.law import ContactLaw, ContactState
 from contact.procedure import LoadProgram, Procedure
 from contact.solver import NewtonSettings
-from contact.tabulated import TabulatedProgram
 from pipelines.coupling import Coupled, CouplingSettings, coupled_patterns, coupled_program, multibody_loading
 from reduction.mesh import generators as meshes
 from pipelines.scene import Scene
@@ -73,6 +72,73 @@ def make_mesh(spec: dict, where: str, base: Path | None):
     return model.mesh, model
 
 
+def _body_mesh(scene: Scene, name: str, spec: dict, override):
+    """(mesh, named sets or None) of body ``name``: ``override`` (a moved mesh) or the scene's."""
+    base = scene.path.parent if scene.path else None
+    sets = None
+    if override is None or "file" in spec["mesh"]:
+        mesh, sets = make_mesh(spec["mesh"], f"bodies.{name}.mesh", base)
+    mesh = mesh if override is None else override
+    if mesh.dim() != scene.dimension:
+        raise InputError(f"'bodies.{name}.mesh' is {mesh.dim()}D but the scene is {scene.dimension}D")
+    return mesh, sets
+
+
+def _body_loads(scene: Scene, name: str, elastic) -> dict:
+    """The scene's gravity and centrifugal loads (N) on body ``name``."""
+    loads = {}
+    for entry in scene.data.get("body_loads", []):
+        if entry["body"] != name:
+            continue
+        if entry["kind"] == "gravity":
+            loads[entry["name"]] = gravity(elastic, entry["acceleration"])
+        else:
+            omega = entry["angular_velocity"]
+            loads[entry["name"]] = centrifugal(elastic, omega[0] if scene.dimension == 2 else omega,
+                                               entry.get("axis_point"))
+    return loads
+
+
+def _body(scene: Scene, name: str, spec: dict, mesh, sets) -> Body:
+    """Body ``name``: its assembled elastic body, supports, reference points and body loads."""
+    dim = scene.dimension
+    material = scene.data["materials"][spec["material"]]
+    elastic = assemble_elastic_body(mesh, material["youngs_modulus"], material["poisson_ratio"],
+                                    material.get("density"))
+    fixed = spec.get("fixed")
+    fixed_nodes = (select_nodes(mesh, fixed["nodes"], f"bodies.{name}.fixed.nodes", sets) if fixed
+                   else np.zeros(0, int))
+    components = tuple(COMPONENTS[c] for c in (fixed or {}).get("components", ["ux", "uy", "uz"][:dim]))
+    references = {}
+    for ref_name, ref in spec.get("reference_points", {}).items():
+        nodes = select_nodes(mesh, ref["nodes"], f"bodies.{name}.reference_points.{ref_name}.nodes", sets)
+        references[ref_name] = ReferencePoint(nodes, np.asarray(ref["position"], float),
+                                              bool(ref.get("rotations", False)))
+    return Body(name, elastic, fixed_nodes, components, references, _body_loads(scene, name, elastic))
+
+
+def _control_patterns(scene: Scene, kind: str) -> dict:
+    """Patterns of ``[[loads]]`` or ``[[motions]]``: name → [(body, point, component, value)]."""
+    out = {}
+    for entry in scene.data.get(kind, []):
+        body, point, comp = entry["dof"].split(".")
+        out[entry["name"]] = [(body, point, comp, float(entry["value"]))]
+    return out
+
+
+def _law(scene: Scene) -> ContactLaw:
+    contact = scene.data["contact"]
+    return ContactLaw(
+        normal_stiffness=contact["normal_stiffness"],
+        critical_slip=contact["critical_slip"],
+        cof_max=contact["cof_max"],
+        cof_rate=contact.get("cof_rate", 0.0) if "cof_evolution" in scene.effects else 0.0,
+        wear_coefficients=tuple(contact.get("wear_coefficients", [0.0, 0.0])),
+        pressure_limit=contact.get("pressure_limit", 0.0),
+        wear_form=contact.get("wear_form", "pressure"),
+    )
+
+
 def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCache | None = None,
           multibody=None) -> Model:
     """Assemble and condense the scene's bodies and read its law, loads and procedure.
@@ -85,86 +151,36 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
     coupled_body = data.get("coupling", {}).get("body")
     loading = (multibody or multibody_loading(scene, cache)) if coupled_body else None
     pattern_names = ()
-    dim = scene.dimension
-    base = scene.path.parent if scene.path else None
     bodies, built_meshes, named_sets = [], {}, {}
     for name, spec in data["bodies"].items():
-        override = (meshes_override or {}).get(name)
-        if override is None or "file" in spec["mesh"]:
-            mesh, sets = make_mesh(spec["mesh"], f"bodies.{name}.mesh", base)
-        else:
-            sets = None
-        mesh = mesh if override is None else override
-        named_sets[name] = sets
-        if mesh.dim() != dim:
-            raise InputError(f"'bodies.{name}.mesh' is {mesh.dim()}D but the scene is {dim}D")
+        mesh, named_sets[name] = _body_mesh(scene, name, spec, (meshes_override or {}).get(name))
         built_meshes[name] = mesh
-        material = data["materials"][spec["material"]]
-        elastic = assemble_elastic_body(mesh, material["youngs_modulus"], material["poisson_ratio"],
-                                        material.get("density"))
-        fixed = spec.get("fixed")
-        fixed_nodes = (select_nodes(mesh, fixed["nodes"], f"bodies.{name}.fixed.nodes", sets) if fixed
-                       else np.zeros(0, int))
-        components = tuple(COMPONENTS[c] for c in (fixed or {}).get("components", ["ux", "uy", "uz"][:dim]))
-        references = {}
-        for ref_name, ref in spec.get("reference_points", {}).items():
-            nodes = select_nodes(mesh, ref["nodes"], f"bodies.{name}.reference_points.{ref_name}.nodes", sets)
-            references[ref_name] = ReferencePoint(nodes, np.asarray(ref["position"], float),
-                                                  bool(ref.get("rotations", False)))
-        body_loads = {}
-        for entry in data.get("body_loads", []):
-            if entry["body"] != name:
-                continue
-            if entry["kind"] == "gravity":
-                body_loads[entry["name"]] = gravity(elastic, entry["acceleration"])
-            else:
-                omega = entry["angular_velocity"]
-                body_loads[entry["name"]] = centrifugal(elastic, omega[0] if dim == 2 else omega,
-                                                        entry.get("axis_point"))
+        body = _body(scene, name, spec, mesh, named_sets[name])
         if name == coupled_body:
-            inertia = coupled_patterns(scene, elastic, mesh, loading)
-            body_loads.update(inertia)
+            inertia = coupled_patterns(scene, body.elastic, mesh, loading)
+            body = replace(body, body_loads={**body.body_loads, **inertia})
             pattern_names = tuple(inertia)
-        bodies.append(Body(name, elastic, fixed_nodes, components, references, body_loads))
+        bodies.append(body)
     contact = data["contact"]
-    slave_mesh = built_meshes[contact["slave"]["body"]]
-    master_mesh = built_meshes[contact["master"]["body"]]
-    slave = (contact["slave"]["body"], select_facets(slave_mesh, contact["slave"], "contact.slave",
-                                                     named_sets[contact["slave"]["body"]]))
-    master = (contact["master"]["body"], select_facets(master_mesh, contact["master"], "contact.master",
-                                                       named_sets[contact["master"]["body"]]))
-
-    def patterns(kind):
-        out = {}
-        for entry in data.get(kind, []):
-            body, point, comp = entry["dof"].split(".")
-            out[entry["name"]] = [(body, point, comp, float(entry["value"]))]
-        return out
-
+    slave, master = ((contact[role]["body"], select_facets(built_meshes[contact[role]["body"]], contact[role],
+                                                           f"contact.{role}", named_sets[contact[role]["body"]]))
+                     for role in ("slave", "master"))
     bolts = tuple(Bolt(name, spec["head"], spec["nut"], np.asarray(spec["axis"], float),
                        float(spec["stiffness"]), float(spec["pretension"]))
                   for name, spec in data.get("bolts", {}).items()) if "bolts" in scene.effects else ()
-    assembly = assemble(bodies, slave, master, loads=patterns("loads"), motions=patterns("motions"),
+    assembly = assemble(bodies, slave, master, loads=_control_patterns(scene, "loads"),
+                        motions=_control_patterns(scene, "motions"),
                         search_distance=contact.get("search_distance", np.inf), bolts=bolts)
     shapes = {e["name"]: e["history"] for kind in ("loads", "motions", "body_loads") for e in data.get(kind, [])}
     shapes.update({f"bolt.{bolt.name}": "ramp" for bolt in bolts})
     shapes.update({name: "history" for name in pattern_names})
     program = LoadProgram(assembly.structure.patterns, shapes)
-    law = ContactLaw(
-        normal_stiffness=contact["normal_stiffness"],
-        critical_slip=contact["critical_slip"],
-        cof_max=contact["cof_max"],
-        cof_rate=contact.get("cof_rate", 0.0) if "cof_evolution" in scene.effects else 0.0,
-        wear_coefficients=tuple(contact.get("wear_coefficients", [0.0, 0.0])),
-        pressure_limit=contact.get("pressure_limit", 0.0),
-        wear_form=contact.get("wear_form", "pressure"),
-    )
     proc = data.get("procedure", {})
     procedure = Procedure(**{k: v for k, v in proc.items()
                              if k in Procedure.__dataclass_fields__})
     settings = NewtonSettings(wear_cap=proc.get("wear_cap", np.inf),
                               max_cutbacks=proc.get("max_cutbacks", NewtonSettings.max_cutbacks))
-    model = Model(scene, assembly, law, program, procedure, settings, built_meshes)
+    model = Model(scene, assembly, _law(scene), program, procedure, settings, built_meshes)
     if coupled_body is None:
         return model
     model = replace(model, coupling=Coupled(CouplingSettings.of(scene), loading, None, pattern_names))

@@ -7,7 +7,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from mbs.model import COUNTERWEIGHT_ROTATION, _half_throw_inertia, simulate, system_eigenfrequencies
+from mbs.items import COUNTERWEIGHT_ROTATION, half_throw_inertia
+from mbs.model import simulate, system_eigenfrequencies
 from mbs.parameters import CrankThrowParams, ModelParams, SolverParams
 from mbs.results import read_histories, write_run
 from mbs.scene import load_model_params
@@ -35,7 +36,7 @@ def throw_polar_inertia(params, reduced, journal_fractions):
     throw = params.throw
     polar = 0.0
     for side, fraction in zip((-1.0, 1.0), journal_fractions):
-        inertia = _half_throw_inertia(throw, side, fraction)
+        inertia = half_throw_inertia(throw, side, fraction)
         com = np.asarray(inertia.COM())
         polar += inertia.InertiaCOM()[2][2] + inertia.Mass() * (com[0] ** 2 + com[1] ** 2)
     nodes = reduced.node_coordinates @ COUNTERWEIGHT_ROTATION.T + [-throw.counterweight_radius, 0.0, 0.0]
