@@ -191,8 +191,30 @@ def cmd_study(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``fretwork`` parser: one sub-command per job."""
     parser = argparse.ArgumentParser(prog="fretwork", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
+    _add_run_parser(sub)
+    _add_validate_and_demo_parsers(sub)
+    _add_limit_parser(sub)
+    _add_reduce_parser(sub)
+    _add_study_parsers(sub)
+    from pipelines.cli.mbs import add_run_parser, add_sweep_parser
+    from pipelines.fmu.cli import add_export_fmu_parser
+    add_export_fmu_parser(sub)
+    sweep = add_sweep_parser(sub)
+    sweep.add_argument("--margins", action="store_true",
+                       help="also find the amplitude limit of the coupled scene and report limit / amplitude per speed")
+    sweep.add_argument("--amplitude", default="50:500", metavar="LOW:HIGH",
+                       help="with --margins: wing amplitude range of the limit search, µm (default %(default)s)")
+    sweep.add_argument("--tolerance", type=float, default=10.0, help="with --margins: limit tolerance, µm")
+    _add_cache_arguments(sweep)
+    sweep.set_defaults(multibody_handler=sweep.get_default("handler"), handler=cmd_sweep)
+    add_run_parser(sub)
+    return parser
+
+
+def _add_run_parser(sub) -> None:
     run = sub.add_parser("run", help="run a scene file")
     run.add_argument("scene")
     run.add_argument("--out", required=True, help="output directory")
@@ -202,6 +224,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="continue an interrupted run from DIR/checkpoint.h5")
     _add_cache_arguments(run)
     run.set_defaults(func=cmd_run)
+
+
+def _add_validate_and_demo_parsers(sub) -> None:
     validate = sub.add_parser("validate", help="validation against closed forms and reference models")
     validate.add_argument("--json", action="store_true")
     validate.add_argument("--quick", action="store_true", help="coarser settings (CI)")
@@ -217,6 +242,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--workers", type=int, default=None, help="worker processes for the limit and sweep cases")
     _add_cache_arguments(demo)
     demo.set_defaults(func=cmd_demo)
+
+
+def _add_limit_parser(sub) -> None:
     limit = sub.add_parser("limit", help="largest wing amplitude that still ends stuck (bisection)",
                            description="Run the coupled scene's COF and wear phases at wing amplitudes in the "
                                        "range and narrow the bracket around the stick limit to the tolerance.")
@@ -230,6 +258,9 @@ def build_parser() -> argparse.ArgumentParser:
     from pipelines.parallel import add_cluster_arguments
     add_cluster_arguments(limit)
     limit.set_defaults(func=cmd_limit)
+
+
+def _add_reduce_parser(sub) -> None:
     reduce = sub.add_parser("reduce", help="accuracy of a Craig-Bampton reduction of a mesh")
     reduce.add_argument("mesh", help="mesh file (Abaqus .inp, Gmsh .msh, ...) with named node sets")
     reduce.add_argument("--modes", type=int, required=True, help="fixed-interface modes")
@@ -241,6 +272,9 @@ def build_parser() -> argparse.ArgumentParser:
     reduce.add_argument("--out", default="results/reduce")
     reduce.add_argument("--json", action="store_true")
     reduce.set_defaults(func=cmd_reduce)
+
+
+def _add_study_parsers(sub) -> None:
     study = sub.add_parser("study", help="studies that compare several runs of a scene")
     kinds = study.add_subparsers(dest="study", required=True)
     constant = kinds.add_parser("constant-cof", help="variable vs constant COF (paper Fig. 8)")
@@ -251,19 +285,6 @@ def build_parser() -> argparse.ArgumentParser:
     constant.set_defaults(func=cmd_study)
     from pipelines.cli.accuracy import add_accuracy_parser
     add_accuracy_parser(kinds)
-    from pipelines.cli.mbs import add_run_parser, add_sweep_parser
-    from pipelines.fmu.cli import add_export_fmu_parser
-    add_export_fmu_parser(sub)
-    sweep = add_sweep_parser(sub)
-    sweep.add_argument("--margins", action="store_true",
-                       help="also find the amplitude limit of the coupled scene and report limit / amplitude per speed")
-    sweep.add_argument("--amplitude", default="50:500", metavar="LOW:HIGH",
-                       help="with --margins: wing amplitude range of the limit search, µm (default %(default)s)")
-    sweep.add_argument("--tolerance", type=float, default=10.0, help="with --margins: limit tolerance, µm")
-    _add_cache_arguments(sweep)
-    sweep.set_defaults(multibody_handler=sweep.get_default("handler"), handler=cmd_sweep)
-    add_run_parser(sub)
-    return parser
 
 
 def main(argv=None) -> int:
