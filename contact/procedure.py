@@ -1,7 +1,7 @@
 """The analysis procedure of the paper's section 3: preload, COF phase, wear phase, verdict.
 
 1. Preload: load patterns marked ``ramp`` go from 0 to full in ``preload_increments``; bolts
-   are locked; a program with a ``run_up`` (operating mean loads, e.g. a counterweight's
+   are locked; a program with a run-up (:meth:`LoadProgram.run_up`: operating mean loads, e.g. a counterweight's
    centrifugal load) then ramps those in as many increments. Nothing evolves or wears here.
 2. COF stabilisation: ``cof_cycles`` cycles of the cyclic patterns with COF evolution (if the
    scene asks for it) and no wear.
@@ -9,9 +9,10 @@
    standing for ``cycle_jump`` real cycles.
 Each phase stops early once the contact is stationary: over ``stationary_window`` cycles
 no more than ``area_tolerance`` of the nominal area still slid (shakedown to stick; see
-:func:`active_slip_area_fraction` for what counts as sliding). The wear phase also stops when
-loosening is evident: the clamp force has kept falling over the window while the stick area
-shrank.
+:func:`contact.verdict.active_slip_area_fraction` for what counts as sliding). The wear phase
+also stops when loosening is evident: the clamp force has kept falling over the window while the
+stick area shrank. A run ends with its :class:`contact.verdict.Ending`; a run whose increment
+fails raises :class:`RunStopped`, which carries the ending too (slid off, wear runaway, diverged).
 
 No I/O here: every increment and cycle is handed to an observer; the pipeline writes files
 and draws progress bars. Units: mm, N, MPa, mJ.
@@ -24,7 +25,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from contact.law import ContactState, Status, utilised_cof
-from contact.solver import ContactSolver, Effects, Equilibrium
+from contact.solver import ContactSolver, ConvergenceError, Effects, Equilibrium
+from contact.verdict import Ending, active_slip_area_fraction, cycle_figures, loosening_evident, verdict
 
 PHASES = ("preload", "cof", "wear")
 HISTORY_SHAPES = ("ramp", "cyclic", "constant")
@@ -46,6 +48,11 @@ class LoadProgram:
     def preload(self, fraction: float) -> np.ndarray:
         return np.array([fraction if self.shapes[p] == "ramp" else
                          1.0 if self.shapes[p] == "constant" else 0.0 for p in self.patterns])
+
+    def run_up(self, fraction: float) -> np.ndarray | None:
+        """Amplitudes at ``fraction`` of the run-up after the bolts are locked (operating mean
+        loads coming on, e.g. an engine's centrifugal load); None: the program has no run-up."""
+        return None
 
     def cycle(self, phase: float) -> np.ndarray:
         """Amplitudes at the fraction ``phase`` ∈ [0, 1] of a load cycle."""
@@ -113,7 +120,7 @@ class IncrementRecord:
 
 @dataclass
 class RunResult:
-    """What a procedure run ends with: final state, the verdict and its figures."""
+    """What a procedure run ends with: final state, the verdict and its figures, and why it ended."""
 
     verdict: str
     stationary: bool
@@ -121,6 +128,26 @@ class RunResult:
     state: ContactState
     equilibrium: Equilibrium
     cycles: list = field(default_factory=list)
+    ending: Ending = Ending.COMPLETED
+
+
+class RunStopped(ConvergenceError):
+    """An increment of the run failed; ``ending`` says how (slid off, wear runaway, diverged)."""
+
+    def __init__(self, message: str, ending: Ending):
+        super().__init__(message)
+        self.ending = ending
+
+
+def failure_ending(error: ConvergenceError) -> Ending:
+    """The ending of a run whose increment raised ``error``. The solver raises one exception type
+    and states the cause in its message; this is the one place that reads it."""
+    message = str(error)
+    if "tangential equilibrium is lost" in message:
+        return Ending.SLID_OFF
+    if "wear increment stays above the cap" in message:
+        return Ending.WEAR_RUNAWAY
+    return Ending.DIVERGED
 
 
 class Observer:
@@ -134,100 +161,6 @@ class Observer:
 
     def phase(self, name: str, n_cycles: int) -> None:
         pass
-
-
-def _fractions(area, nominal, mask):
-    return float(area[mask].sum() / nominal) if nominal > 0 else 0.0
-
-
-def cycle_figures(area: np.ndarray, nominal_area: float, status: np.ndarray,
-                  max_utilised: np.ndarray, state: ContactState, cof_initial: np.ndarray,
-                  cof_max, area_tolerance: float) -> dict:
-    """Global figures of a cycle: area fractions, margin, wear, dissipation.
-
-    Fractions refer to the nominal contact area (closed after the preload). The stick margin
-    is 1 − max utilised COF / μ_max over points that stayed stuck.
-    """
-    stuck = status == Status.STICK
-    slipped = status >= Status.SLIP
-    damaged = status == Status.SLIP_AT_MAX
-    wear = state.gap if state.wear_depth is not None else np.zeros_like(area)
-    margins = 1.0 - max_utilised[stuck] / np.broadcast_to(cof_max, area.shape)[stuck]
-    return {
-        "stick_area_fraction": _fractions(area, nominal_area, stuck),
-        "slip_area_fraction": _fractions(area, nominal_area, slipped),
-        "damaged_area_fraction": _fractions(area, nominal_area, damaged),
-        "worn_area_fraction": _fractions(area, nominal_area, np.asarray(wear) > 1e-9),
-        # evolved: risen by more than 1 % of its range (numerical micro-slips of equilibrium
-        # iterations raise μ by round-off amounts that are not fretting)
-        "cof_evolved_area_fraction": _fractions(area, nominal_area, state.cof > cof_initial + 0.01 * (
-            np.broadcast_to(cof_max, area.shape) - cof_initial)),
-        "max_wear_depth_mm": float(np.max(wear, initial=0.0)),
-        "wear_volume_mm3": float(np.sum(np.asarray(wear) * area)),
-        "dissipated_energy_mJ": float(np.sum(state.dissipation * area)),
-        "min_stick_margin": float(margins.min()) if margins.size else None,
-    }
-
-
-def active_slip_area_fraction(area: np.ndarray, nominal_area: float, pressure: np.ndarray,
-                              dissipation_in_cycle: np.ndarray, cof: np.ndarray,
-                              critical_slip, slip_tolerance: float) -> float:
-    """Fraction of the nominal area that still slides in a cycle, in the sense of the verdict.
-
-    A point slides when its pressure-weighted irreversible slip over the cycle,
-    Σ p·Δγ_sl / p̄ (Σ p·Δγ_sl = dissipation / μ, the Archard wear driver; p̄ the mean pressure
-    over the nominal area at the end of the cycle), exceeds ``slip_tolerance``·γ_crit.
-    Two kinds of point fail that test although their status says slip: points worn out of
-    contact, whose pressure Archard wear drives towards zero only asymptotically (w·Δγ·p
-    vanishes with p), and points at the stick limit whose irreversible slip is a tiny
-    fraction of the elastic slip γ_crit the law already treats as stick. Neither carries
-    friction load nor wears or evolves its COF any more. Units: area mm², pressure MPa,
-    dissipation mJ/mm², critical_slip mm.
-    """
-    mean_pressure = float(np.sum(pressure * area) / nominal_area) if nominal_area > 0 else 0.0
-    if mean_pressure <= 0.0:
-        return 0.0
-    weighted_slip = np.divide(dissipation_in_cycle, cof, out=np.zeros_like(dissipation_in_cycle),
-                              where=cof > 0.0) / mean_pressure
-    sliding = weighted_slip > slip_tolerance * np.broadcast_to(critical_slip, area.shape)
-    return _fractions(area, nominal_area, sliding)
-
-
-def _verdict(history: list[CycleSummary], procedure: Procedure, stationary: bool) -> str:
-    """``loosening`` (see :func:`_loosening`), else ``stick`` when at most ``area_tolerance``
-    of the area still slid in the last cycle (:func:`active_slip_area_fraction`; histories
-    without it fall back to the status-based slip area), else ``damage``."""
-    last = history[-1].figures
-    if _loosening(history, procedure):
-        return "loosening"
-    sliding = last.get("active_slip_area_fraction", last["slip_area_fraction"])
-    if sliding <= procedure.area_tolerance:
-        return "stick"
-    return "damage"
-
-
-def _loosening(history: list[CycleSummary], procedure: Procedure) -> bool:
-    """Loosening is evident when, over the last ``loosening_window`` wear cycles, the clamp
-    force keeps falling without its rate decaying (second half at least 0.8 of the first),
-    by a visible amount (0.5 % of the clamp force), while the stick area shrinks or the
-    whole contact slides. The shrinking is the least-squares trend of the stick area over
-    the window, not its first and last values: points at the stick limit flicker between
-    stick and slip from cycle to cycle by a few per cent of the area, and an endpoint
-    comparison called a contact loosening whose stick area was steady or regrowing."""
-    wear_cycles = [c for c in history if c.phase == "wear" and c.clamp_force is not None]
-    if len(wear_cycles) < procedure.loosening_window:
-        return False
-    recent = wear_cycles[-procedure.loosening_window:]
-    force = np.array([c.clamp_force for c in recent])
-    stick = np.array([c.figures["stick_area_fraction"] for c in recent])
-    middle = len(force) // 2
-    first_rate = (force[0] - force[middle]) / middle
-    second_rate = (force[middle] - force[-1]) / (len(force) - 1 - middle)
-    falling = second_rate > 0.0 and second_rate >= 0.8 * first_rate
-    visible = force[0] - force[-1] > 5e-3 * abs(force[0])
-    stick_change = np.polyfit(np.arange(len(stick)), stick, 1)[0] * (len(stick) - 1)
-    stick_shrinks = stick_change < -procedure.area_tolerance or stick[-1] <= procedure.area_tolerance
-    return bool(falling and visible and stick_shrinks)
 
 
 @dataclass
@@ -253,6 +186,165 @@ class Snapshot:
     history: list
 
 
+class _Run:
+    """The state a run carries from increment to increment: solver, bolts, program, contact
+    state and equilibrium, and the bookkeeping of cycles and phases (:func:`run`)."""
+
+    def __init__(self, solver, state, program, procedure, observer):
+        self.solver, self.state, self.program, self.procedure = solver, state, program, procedure
+        self.observer = observer
+        self.bolts = solver.space.structure.bolts
+        self.equilibrium = None
+        self.history: list[CycleSummary] = []
+        self.cycle_number, self.first_phase, self.done_in_phase, self.quiet_cycles = 0, 0, 0, 0
+        self.equivalent, self.nominal_area, self.initial_clamp, self.cof_initial = 0.0, 0.0, None, None
+        self.stationary = False
+
+    def bolt_forces(self):
+        return None if self.bolts is None else self.bolts.forces(self.solver.space, self.equilibrium)
+
+    def clamp_force(self):
+        return None if self.bolts is None else float(self.bolt_forces().sum())
+
+    def step(self, amplitudes, effects, phase, cycle, t):
+        """One load increment; the observer sees it. Returns the point status."""
+        self.equilibrium, self.state, status, stats = self.solver.increment(self.equilibrium, self.state,
+                                                                           amplitudes, effects)
+        self.observer.increment(IncrementRecord(phase, cycle, t, self.equilibrium, self.state, status,
+                                                stats.iterations, stats.max_iterations, stats.cutbacks,
+                                                stats.substeps, self.bolt_forces()))
+        return status
+
+    def lock(self, elongation):
+        """Lock the bolts at ``elongation`` (mm): the solver works on the locked structure from now on."""
+        self.bolts, space = self.bolts.lock_at(self.solver.space, elongation)
+        self.solver = ContactSolver(space, self.solver.law, self.solver.settings)
+
+    def hold_bolt_amplitudes(self):
+        if self.bolts is not None:
+            self.program = replace(self.program, held={p: self.equilibrium.amplitudes[self.program.patterns.index(p)]
+                                                       for p in self.bolts.patterns})
+
+    def preload(self, start):
+        """Pretension and static loads, bolts locked, then the operating mean loads (run-up)."""
+        n = self.procedure.preload_increments
+        self.cof_initial = self.state.cof.copy()
+        self.equilibrium = start or self.solver.initial_equilibrium()
+        self.observer.phase("preload", 0)
+        for k in range(1, n + 1):
+            self.step(self.program.preload(k / n), Effects(), "preload", 0, k / n)
+        if self.bolts is not None:
+            self.lock(self.bolts.elongation(self.solver.space, self.equilibrium.control))
+            self.equilibrium = replace(self.equilibrium,
+                                       amplitudes=self.bolts.locked_amplitudes(self.solver.space, self.equilibrium))
+            self.hold_bolt_amplitudes()
+        for k in range(1, n + 1):  # operating mean loads come on after the bolts are locked
+            amplitudes = self.program.run_up(k / n)
+            if amplitudes is None:
+                break
+            self.step(amplitudes, Effects(), "preload", 0, 1.0 + k / n)
+        closed = self.equilibrium.forces.reshape(self.solver.n_points, -1)[:, 0] > 0.0
+        self.nominal_area = float(self.solver.area[closed].sum())
+        self.initial_clamp = self.clamp_force()
+
+    def resume(self, snapshot: Snapshot):
+        """Continue after a checkpoint: the state between two cycles."""
+        self.cof_initial, self.state, self.equilibrium = snapshot.cof_initial, snapshot.state, snapshot.equilibrium
+        self.nominal_area, self.initial_clamp = snapshot.nominal_area, snapshot.initial_clamp
+        self.history = list(snapshot.history)
+        self.cycle_number, self.first_phase = snapshot.cycle_number, snapshot.phase_index
+        self.done_in_phase, self.quiet_cycles = snapshot.cycles_in_phase, snapshot.quiet_cycles
+        self.equivalent = snapshot.equivalent
+        if self.bolts is not None:
+            self.lock(snapshot.locked_elongation)
+
+    def cycle(self, phase: str, effects: Effects) -> CycleSummary:
+        """One load cycle of ``increments_per_cycle`` increments and its summary."""
+        solver, n_inc = self.solver, self.procedure.increments_per_cycle
+        self.cycle_number += 1
+        start_slip = self.state.slip_vector.copy()
+        low, high = start_slip.copy(), start_slip.copy()
+        start_dissipation, start_cof = self.state.dissipation.copy(), self.state.cof.copy()
+        max_util, max_shear = np.zeros(solver.n_points), np.zeros(solver.n_points)
+        worst = np.zeros(solver.n_points, dtype=np.int8)
+        ever_closed = np.zeros(solver.n_points, dtype=bool)
+        for k in range(1, n_inc + 1):
+            status = self.step(self.program.cycle(k / n_inc), effects, phase, self.cycle_number,
+                               self.cycle_number - 1 + k / n_inc)
+            utilisation, shear_now = _utilisation(self.equilibrium, solver)
+            max_util, max_shear = np.maximum(max_util, utilisation), np.maximum(max_shear, shear_now)
+            worst = np.maximum(worst, status)
+            ever_closed |= status != Status.OPEN
+            low, high = np.minimum(low, self.state.slip_vector), np.maximum(high, self.state.slip_vector)
+        self.equivalent += effects.cycle_jump if phase == "wear" else 1.0
+        cycle_status = np.where(ever_closed, np.maximum(worst, Status.STICK), Status.OPEN).astype(np.int8)
+        per_point = self.equilibrium.forces.reshape(solver.n_points, -1) / solver.area[:, None]
+        summary = CycleSummary(
+            cycle=self.cycle_number, phase=phase, equivalent_cycles=self.equivalent,
+            pressure=per_point[:, 0], shear=per_point[:, 1:], cof=self.state.cof.copy(),
+            max_utilised_cof=max_util, max_shear=max_shear, status=cycle_status,
+            slip_range=np.linalg.norm(high - low, axis=1),
+            dissipation_in_cycle=self.state.dissipation - start_dissipation, state=self.state,
+            clamp_force=self.clamp_force())
+        law = solver.law
+        summary.figures = cycle_figures(solver.area, self.nominal_area, cycle_status, max_util, self.state,
+                                        self.cof_initial, law.cof_max, self.procedure.area_tolerance)
+        summary.figures["active_slip_area_fraction"] = active_slip_area_fraction(
+            solver.area, self.nominal_area, summary.pressure, summary.dissipation_in_cycle, start_cof,
+            law.critical_slip, self.procedure.slip_tolerance)
+        summary.figures["clamp_force_N"] = summary.clamp_force
+        return summary
+
+    def phase(self, phase_index, phase, n_cycles, effects, checkpoint, checkpoint_every) -> bool:
+        """Run the cycles of one phase; True when the run stops early (shakedown or loosening)."""
+        resuming = phase_index == self.first_phase and self.done_in_phase > 0
+        if not resuming:
+            self.quiet_cycles = 0
+        self.observer.phase(phase, n_cycles)
+        keep = max(self.procedure.loosening_window, 1)
+        for count in range(self.done_in_phase if resuming else 0, n_cycles):
+            summary = self.cycle(phase, effects)
+            self.history.append(summary)
+            del self.history[:-keep]
+            self.observer.cycle(summary)
+            slid = summary.figures["active_slip_area_fraction"] > self.procedure.area_tolerance
+            self.quiet_cycles = 0 if slid else self.quiet_cycles + 1
+            loosening = False
+            if self.quiet_cycles >= self.procedure.stationary_window:
+                self.stationary = True
+            elif phase == "wear" and loosening_evident(self.history, self.procedure):
+                loosening = True
+            if checkpoint_every and self.cycle_number % checkpoint_every == 0:
+                self.solver.forget_cached_factorisations()
+                if checkpoint is not None and not (self.stationary or loosening or count + 1 == n_cycles):
+                    checkpoint(self.snapshot(phase_index, count + 1))
+            if self.stationary or loosening:
+                return True
+        return False
+
+    def snapshot(self, phase_index, cycles_in_phase) -> Snapshot:
+        return Snapshot(self.cycle_number, phase_index, cycles_in_phase, self.quiet_cycles, self.equivalent,
+                        self.nominal_area, self.initial_clamp,
+                        None if self.bolts is None else self.bolts.locked_elongation,
+                        self.cof_initial, self.state, self.equilibrium, list(self.history))
+
+    def result(self, stopped_early: bool) -> RunResult:
+        if not self.history:
+            raise ValueError("the procedure has no load cycles: set cof_cycles or wear_cycles > 0")
+        figures = dict(self.history[-1].figures)
+        figures["cycles_run"] = self.cycle_number
+        figures["equivalent_cycles"] = self.equivalent
+        figures["nominal_contact_area"] = self.nominal_area
+        if self.bolts is not None:
+            final_clamp = self.history[-1].clamp_force
+            figures["bolt_force_initial_N"] = self.initial_clamp
+            figures["bolt_force_final_N"] = final_clamp
+            figures["clamp_force_loss_fraction"] = (self.initial_clamp - final_clamp) / self.initial_clamp
+        ending = (Ending.SHAKEDOWN if self.stationary else Ending.LOOSENING if stopped_early else Ending.COMPLETED)
+        return RunResult(verdict(self.history, self.procedure, self.stationary), self.stationary, figures,
+                         self.state, self.equilibrium, self.history, ending)
+
+
 def run(solver: ContactSolver, state: ContactState, program: LoadProgram, procedure: Procedure, *,
         cof_evolution: bool, wear: bool, observer: Observer | None = None,
         start: Equilibrium | None = None, checkpoint=None, checkpoint_every: int = 0,
@@ -263,147 +355,32 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
     length before the first cycle; the clamp force is the sum of the bolt forces.
     ``checkpoint(snapshot)`` is called every ``checkpoint_every`` cycles; ``resume`` continues
     from such a snapshot. Cached factorisations are dropped at every checkpoint boundary, so a
-    resumed run repeats the uninterrupted one bit for bit.
+    resumed run repeats the uninterrupted one bit for bit. Raises :class:`RunStopped` (a
+    ConvergenceError with its :class:`Ending`) when an increment fails.
     """
-    observer = observer or Observer()
-    law = solver.law
-    area = solver.area
-    bolts = solver.space.structure.bolts
-
-    def bolt_forces(eq):
-        return None if bolts is None else bolts.forces(solver.space, eq)
-
-    def step(amplitudes, effects, phase, cycle, t):
-        nonlocal equilibrium, state
-        equilibrium, state, status, stats = solver.increment(equilibrium, state, amplitudes, effects)
-        observer.increment(IncrementRecord(phase, cycle, t, equilibrium, state, status, stats.iterations,
-                                           stats.max_iterations, stats.cutbacks, stats.substeps,
-                                           bolt_forces(equilibrium)))
-        return status
-
-    def lock(elongation):
-        nonlocal bolts, solver, program
-        bolts, space = bolts.lock_at(solver.space, elongation)
-        solver = ContactSolver(space, law, solver.settings)
-
-    if resume is None:
-        cof_initial = state.cof.copy()
-        equilibrium = start or solver.initial_equilibrium()
-        observer.phase("preload", 0)
-        for k in range(1, procedure.preload_increments + 1):
-            step(program.preload(k / procedure.preload_increments), Effects(), "preload", 0,
-                 k / procedure.preload_increments)
-        if bolts is not None:
-            lock(bolts.elongation(solver.space, equilibrium.control))
-            equilibrium = replace(equilibrium, amplitudes=bolts.locked_amplitudes(solver.space, equilibrium))
-            program = replace(program, held={p: equilibrium.amplitudes[program.patterns.index(p)]
-                                             for p in bolts.patterns})
-        run_up = getattr(program, "run_up", None)
-        if run_up is not None:  # operating mean loads come on after the bolts are locked (engine run-up)
-            for k in range(1, procedure.preload_increments + 1):
-                step(run_up(k / procedure.preload_increments), Effects(), "preload", 0,
-                     1.0 + k / procedure.preload_increments)
-        closed = equilibrium.forces.reshape(solver.n_points, -1)[:, 0] > 0.0
-        nominal_area = float(area[closed].sum())
-        history: list[CycleSummary] = []
-        cycle_number, first_phase, done_in_phase, quiet_cycles, equivalent = 0, 0, 0, 0, 0.0
-        initial_clamp = None if bolts is None else float(bolt_forces(equilibrium).sum())
-    else:
-        cof_initial, state, equilibrium = resume.cof_initial, resume.state, resume.equilibrium
-        nominal_area, initial_clamp, history = resume.nominal_area, resume.initial_clamp, list(resume.history)
-        cycle_number, first_phase = resume.cycle_number, resume.phase_index
-        done_in_phase, quiet_cycles, equivalent = resume.cycles_in_phase, resume.quiet_cycles, resume.equivalent
-        if bolts is not None:
-            lock(resume.locked_elongation)
-    if bolts is not None:
-        program = replace(program, held={p: equilibrium.amplitudes[program.patterns.index(p)]
-                                         for p in bolts.patterns})
-
-    stationary = False
-    phases = [("cof", procedure.cof_cycles, Effects(cof_evolution=cof_evolution)),
-              ("wear", procedure.wear_cycles if wear else 0,
-               Effects(cof_evolution=cof_evolution and procedure.cof_during_wear, wear=wear,
-                       cycle_jump=procedure.cycle_jump))]
-    keep = max(procedure.loosening_window, 1)
-    for phase_index, (phase, n_cycles, effects) in enumerate(phases):
-        if phase_index < first_phase or n_cycles <= 0:
-            continue
-        resuming_this_phase = phase_index == first_phase and done_in_phase > 0
-        start_count = done_in_phase if resuming_this_phase else 0
-        if not resuming_this_phase:
-            quiet_cycles = 0
-        observer.phase(phase, n_cycles)
-        finished = False
-        for count in range(start_count, n_cycles):
-            cycle_number += 1
-            n_inc = procedure.increments_per_cycle
-            start_slip = state.slip_vector.copy()
-            low, high = start_slip.copy(), start_slip.copy()
-            start_dissipation = state.dissipation.copy()
-            start_cof = state.cof.copy()
-            max_util = np.zeros(solver.n_points)
-            max_shear = np.zeros(solver.n_points)
-            worst = np.zeros(solver.n_points, dtype=np.int8)
-            ever_closed = np.zeros(solver.n_points, dtype=bool)
-            for k in range(1, n_inc + 1):
-                status = step(program.cycle(k / n_inc), effects, phase, cycle_number,
-                              cycle_number - 1 + k / n_inc)
-                utilisation, shear_now = _utilisation(equilibrium, solver)
-                max_util = np.maximum(max_util, utilisation)
-                max_shear = np.maximum(max_shear, shear_now)
-                worst = np.maximum(worst, status)
-                ever_closed |= status != Status.OPEN
-                low = np.minimum(low, state.slip_vector)
-                high = np.maximum(high, state.slip_vector)
-            equivalent += effects.cycle_jump if phase == "wear" else 1.0
-            cycle_status = np.where(ever_closed, np.maximum(worst, Status.STICK), Status.OPEN).astype(np.int8)
-            per_point = equilibrium.forces.reshape(solver.n_points, -1) / area[:, None]
-            summary = CycleSummary(
-                cycle=cycle_number, phase=phase, equivalent_cycles=equivalent,
-                pressure=per_point[:, 0], shear=per_point[:, 1:], cof=state.cof.copy(),
-                max_utilised_cof=max_util, max_shear=max_shear, status=cycle_status,
-                slip_range=np.linalg.norm(high - low, axis=1),
-                dissipation_in_cycle=state.dissipation - start_dissipation, state=state,
-                clamp_force=None if bolts is None else float(bolt_forces(equilibrium).sum()))
-            summary.figures = cycle_figures(area, nominal_area, cycle_status, max_util, state,
-                                            cof_initial, law.cof_max, procedure.area_tolerance)
-            summary.figures["active_slip_area_fraction"] = active_slip_area_fraction(
-                area, nominal_area, summary.pressure, summary.dissipation_in_cycle, start_cof,
-                law.critical_slip, procedure.slip_tolerance)
-            summary.figures["clamp_force_N"] = summary.clamp_force
-            history.append(summary)
-            del history[:-keep]
-            observer.cycle(summary)
-            slid = summary.figures["active_slip_area_fraction"] > procedure.area_tolerance
-            quiet_cycles = 0 if slid else quiet_cycles + 1
-            if quiet_cycles >= procedure.stationary_window:
-                stationary = True
-            elif phase == "wear" and _loosening(history, procedure):
-                finished = True
-            if checkpoint_every and cycle_number % checkpoint_every == 0:
-                solver.forget_cached_factorisations()
-                if checkpoint is not None and not (stationary or finished or count + 1 == n_cycles):
-                    checkpoint(Snapshot(cycle_number, phase_index, count + 1, quiet_cycles, equivalent,
-                                        nominal_area, initial_clamp,
-                                        None if bolts is None else bolts.locked_elongation,
-                                        cof_initial, state, equilibrium, list(history)))
-            if stationary or finished:
+    current = _Run(solver, state, program, procedure, observer or Observer())
+    try:
+        if resume is None:
+            current.preload(start)
+        else:
+            current.resume(resume)
+        current.hold_bolt_amplitudes()
+        phases = [("cof", procedure.cof_cycles, Effects(cof_evolution=cof_evolution)),
+                  ("wear", procedure.wear_cycles if wear else 0,
+                   Effects(cof_evolution=cof_evolution and procedure.cof_during_wear, wear=wear,
+                           cycle_jump=procedure.cycle_jump))]
+        stopped_early = False
+        for phase_index, (phase, n_cycles, effects) in enumerate(phases):
+            if phase_index < current.first_phase or n_cycles <= 0:
+                continue
+            stopped_early = current.phase(phase_index, phase, n_cycles, effects, checkpoint, checkpoint_every)
+            if current.stationary:
                 break
-        if stationary:
-            break
-    if not history:
-        raise ValueError("the procedure has no load cycles: set cof_cycles or wear_cycles > 0")
-    figures = dict(history[-1].figures)
-    figures["cycles_run"] = cycle_number
-    figures["equivalent_cycles"] = equivalent
-    figures["nominal_contact_area"] = nominal_area
-    if bolts is not None:
-        final_clamp = history[-1].clamp_force
-        figures["bolt_force_initial_N"] = initial_clamp
-        figures["bolt_force_final_N"] = final_clamp
-        figures["clamp_force_loss_fraction"] = (initial_clamp - final_clamp) / initial_clamp
-    verdict = _verdict(history, procedure, stationary)
-    return RunResult(verdict, stationary, figures, state, equilibrium, history)
+    except RunStopped:
+        raise
+    except ConvergenceError as error:
+        raise RunStopped(str(error), failure_ending(error)) from error
+    return current.result(stopped_early)
 
 
 def _utilisation(equilibrium: Equilibrium, solver: ContactSolver) -> tuple[np.ndarray, np.ndarray]:
@@ -414,4 +391,4 @@ def _utilisation(equilibrium: Equilibrium, solver: ContactSolver) -> tuple[np.nd
 
 
 __all__ = ["LoadProgram", "Procedure", "run", "Observer", "CycleSummary", "IncrementRecord",
-           "RunResult", "Snapshot", "cycle_figures", "active_slip_area_fraction"]
+           "RunResult", "RunStopped", "Snapshot", "failure_ending"]

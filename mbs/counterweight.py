@@ -32,6 +32,7 @@ import skfem
 
 from reduction.elasticity import ElasticBody, assemble_elastic_body
 from reduction.errors import InputError
+from reduction.mesh.generators import cells_inside, counterweight_solids
 from reduction.exudyn_bridge import FloatingFrameModes, fem_interface, floating_frame_modes
 
 
@@ -122,7 +123,8 @@ class ReducedCounterweight:
 
 
 def counterweight_mesh(geometry: CounterweightGeometry) -> skfem.MeshTet1:
-    """Tetrahedral mesh of the CW block; cells of the relief under the wings are removed."""
+    """Tetrahedral mesh of the CW block: the tensor grid cut to the CW's shape
+    (:func:`reduction.mesh.generators.counterweight_solids`), which removes the relief under the wings."""
     geometry.validate()
     g = geometry
     half_hub = 0.5 * g.hub_width
@@ -137,9 +139,8 @@ def counterweight_mesh(geometry: CounterweightGeometry) -> skfem.MeshTet1:
     y = np.concatenate([[0.0], np.linspace(g.hub_height, g.height, g.elements_y + 1)])
     z = np.linspace(-0.5 * g.thickness, 0.5 * g.thickness, g.elements_z + 1)
     mesh = skfem.MeshTet1.init_tensor(x, y, z)
-    centroids = mesh.p[:, mesh.t].mean(axis=1)
-    relief = (centroids[1] < g.hub_height) & (np.abs(centroids[0]) > half_hub)
-    return mesh.remove_elements(np.nonzero(relief)[0])
+    shape = counterweight_solids(g.width, g.height, g.thickness, g.hub_width, g.hub_height)
+    return mesh.remove_elements(np.flatnonzero(~cells_inside(mesh, shape)))
 
 
 def _nodes_near(coordinates: np.ndarray, point, tolerance: float) -> int:

@@ -1,4 +1,11 @@
-"""Histories of one multibody run: the dataclass, its collection from exudyn sensors, energy.
+"""Histories of one multibody run: the dataclass, its collection from exudyn sensors, energy,
+and the one definition of the wing amplitude.
+
+The wing amplitude (:func:`wing_amplitude`) is half the peak-to-peak of the wing torsion
+(u_z(+x tip) - u_z(-x tip))/2 over the steady state of a run, in mm. The steady state is the
+second half of the run (:func:`steady_part`): the first half is the start-up transient, so a
+run must last long enough for the transient to decay (a few times 1 / (damping ratio x 2 pi f)
+of the torsion mode). Every command, plot, study and report reads the wing amplitude from here.
 
 Units: mm, N, t, s, rad; energies in mJ (N mm).
 """
@@ -13,6 +20,21 @@ from mbs.counterweight import ReducedCounterweight
 
 #: Energy is evaluated on at most this many samples: the CW kinetic energy needs the full FE mass.
 ENERGY_SAMPLES = 201
+
+
+def steady_part(n_samples: int) -> slice:
+    """The samples of a run's steady state: its second half (the first is the start-up transient)."""
+    return slice(n_samples // 2, None)
+
+
+def wing_amplitude(steady_torsion: np.ndarray) -> np.ndarray:
+    """The wing amplitude, mm: half the peak-to-peak of the wing torsion over the steady state.
+
+    steady_torsion: wing torsion (mm) over the steady part of a run, samples along the last
+    axis ((n,) for one CW, (number of CWs, n) for all); returns a float or one value per CW.
+    """
+    torsion = np.asarray(steady_torsion, dtype=float)
+    return 0.5 * (torsion.max(axis=-1) - torsion.min(axis=-1))
 
 
 @dataclass(frozen=True)
@@ -75,6 +97,11 @@ class RunHistories:
     def wing_torsion(self) -> np.ndarray:
         """(2, n) mm: opposite-phase (torsion) part of the wing-tip axial motion, (u_+x - u_-x)/2."""
         return 0.5 * (self.cw_wing_tip_axial[:, :, 1] - self.cw_wing_tip_axial[:, :, 0])
+
+    @property
+    def wing_amplitude(self) -> np.ndarray:
+        """(number of CWs,) mm: the wing amplitude of each CW (:func:`wing_amplitude`)."""
+        return wing_amplitude(self.wing_torsion[:, steady_part(len(self.time))])
 
     @property
     def real_time_factor(self) -> float:

@@ -9,11 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from mbs.campbell import Campbell, campbell_diagram
-from mbs.counterweight import ReducedCounterweight, reduce_counterweight
+from mbs.counterweight import ReducedCounterweight
 from mbs.excitation import excitation_orders
-from mbs.flexible_throw import reduce_throw
-from mbs.histories import RunHistories
-from mbs.model import simulate, system_eigenfrequencies
+from mbs.histories import RunHistories, steady_part
+from mbs.model import reduce_bodies, simulate, system_eigenfrequencies
 from mbs.parameters import ModelParams
 from mbs.plots import plot_campbell, plot_spectrum, plot_time_history
 from mbs.results import write_run
@@ -33,9 +32,11 @@ class RunOutputs:
     plots: dict[str, Path]
 
 
-def run_model(params: ModelParams, out_dir, *, reduced: ReducedCounterweight | None = None,
+def run_model(params: ModelParams, out_dir, *, bodies: tuple | None = None,
               campbell_speeds_rpm=None) -> RunOutputs:
     """Simulate params, analyse the steady second half of the run and write run.h5 + PNGs to out_dir.
+
+    bodies: (reduced CW, reduced throw or None) from :func:`mbs.model.reduce_bodies`; reduced here if None.
 
     campbell_speeds_rpm: speeds of the Campbell diagram (default 0.1 to 1.3 x engine speed); the
     diagram carries the reduced-CW modes and the coupled-model modes (one eigen-analysis per speed).
@@ -43,14 +44,13 @@ def run_model(params: ModelParams, out_dir, *, reduced: ReducedCounterweight | N
     whole revolutions of the second half.
     """
     out_dir = Path(out_dir)
-    reduced = reduced if reduced is not None else reduce_counterweight(params.counterweight, params.n_modes)
-    reduced_throw = reduce_throw(params.throw) if "flexible_crankshaft" in params.effects else None
+    reduced, reduced_throw = bodies if bodies is not None else reduce_bodies(params)
     histories = simulate(params, reduced=reduced, reduced_throw=reduced_throw)
-    steady = slice(len(histories.time) // 2, None)
+    steady = steady_part(len(histories.time))
     torsion = histories.wing_torsion[:, steady].T
     spectra = {"wing_torsion": amplitude_spectrum(histories.time[steady], torsion)}
     revolution = 2.0 * np.pi / params.shaft_speed
-    steady_duration = histories.time[-1] - histories.time[len(histories.time) // 2] + params.solver.time_step
+    steady_duration = histories.time[-1] - histories.time[steady][0] + params.solver.time_step
     if steady_duration >= revolution * (1.0 - 1e-9):
         spectra["wing_torsion_orders"] = order_spectrum(histories.time[steady], torsion, params.shaft_speed)
     speeds = campbell_speeds_rpm if campbell_speeds_rpm is not None else np.linspace(0.1, 1.3, 14) * params.speed_rpm

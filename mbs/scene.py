@@ -94,7 +94,8 @@ def model_params_from_mapping(table: dict, where: str = "[mbs]", folder: Path = 
 
 
 def load_model_params(path) -> ModelParams:
-    """ModelParams from the [mbs] table of a scene file (defaults where the table is absent)."""
+    """ModelParams from the [mbs] table of a scene file (defaults for keys the table leaves out);
+    a scene without an [mbs] table is refused: it does not describe a multibody model."""
     path = Path(path)
     try:
         with path.open("rb") as stream:
@@ -103,4 +104,7 @@ def load_model_params(path) -> ModelParams:
         raise InputError(f"scene file {path} does not exist") from None
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"scene file {path} is not valid TOML: {error}") from None
-    return model_params_from_mapping(scene.get("mbs", {}), where=f"{path}: [mbs]", folder=path.parent)
+    if not isinstance(scene.get("mbs"), dict):
+        raise InputError(f"{path} has no [mbs] table: it does not describe a multibody model "
+                         "(an empty [mbs] table runs the default generic engine)")
+    return model_params_from_mapping(scene["mbs"], where=f"{path}: [mbs]", folder=path.parent)

@@ -1,35 +1,29 @@
 """Engine-speed sweep: wing amplitude and dominant frequencies per speed, resonance crossings.
 
-Each speed is one fixed-step run of the model plus the coupled eigenfrequencies at that speed,
-run as an independent case on dask (pipelines.distributed: an embedded local cluster by default,
-an existing one with `scheduler`, in this process with workers=0). The CW (and flexible-throw)
-reduction is done once on the client and sent to every worker once: re-reducing on each worker
-cost more (see tests/bench/test_bench_distributed.py). The first half of
-every run is the start-up transient and is discarded; amplitudes and spectra use the second half,
-so choose SolverParams.revolutions long enough for the transient to decay (a few times
-1 / (damping ratio x 2 pi f) of the torsion mode). A speed whose time integration fails (or whose
-case fails otherwise) is recorded in `failures` and the sweep goes on. Units: rpm, Hz, mm.
+Each speed is one case (:func:`run_speed`): a fixed-step run of the model plus the coupled
+eigenfrequencies at that speed. :func:`collect_sweep` gathers the cases into a
+:class:`SweepResult` and :func:`write_sweep` stores it; running the cases (in parallel, on a
+cluster) is the pipeline's job (``pipelines.jobs.sweep``). Amplitudes and spectra use the
+steady state of every run (:mod:`mbs.histories`). A speed whose time integration fails is
+recorded in ``failures`` and the sweep goes on. Units: rpm, Hz, mm.
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import h5py
 import numpy as np
 
 from mbs.campbell import Campbell, campbell_diagram
-from mbs.counterweight import reduce_counterweight
 from mbs.excitation import excitation_orders
-from mbs.flexible_throw import reduce_throw
+from mbs.histories import steady_part
 from mbs.model import SimulationError, simulate, system_eigenfrequencies
 from mbs.parameters import ModelParams
 from mbs.results import FORMAT, FORMAT_VERSION, write_campbell
 from mbs.spectra import amplitude_spectrum, dominant_frequencies
-from pipelines.distributed import map_cases
-from reduction.errors import InputError
 
 #: Number of dominant frequencies recorded per speed and number of system modes kept.
 N_DOMINANT = 3
@@ -75,30 +69,14 @@ class SweepResult:
         }
 
 
-def parse_speeds(text: str) -> np.ndarray:
-    """'500:800:10' -> 500, 510, ..., 800 rpm (end included); '600,650,700' -> a list."""
-    try:
-        if ":" in text:
-            start, stop, step = (float(v) for v in text.split(":"))
-            if step <= 0 or stop < start:
-                raise ValueError
-            return np.arange(start, stop + 0.5 * step, step)
-        return np.asarray([float(v) for v in text.split(",")])
-    except ValueError:
-        raise InputError(f"speeds {text!r}: use START:STOP:STEP with STEP > 0 and STOP >= START, "
-                         "or a comma-separated list (rpm)") from None
-
-
 def _evaluate(run, shaft_speed: float):
-    half = len(run.time) // 2
-    torsion = run.wing_torsion[:, half:]
-    amplitude = 0.5 * (torsion.max(axis=1) - torsion.min(axis=1))
-    spectrum = amplitude_spectrum(run.time[half:], torsion[0])
+    steady = steady_part(len(run.time))
+    spectrum = amplitude_spectrum(run.time[steady], run.wing_torsion[0, steady])
     resolution = spectrum.frequency[1]
     frequencies = np.full(N_DOMINANT, np.nan)
     found = dominant_frequencies(spectrum, N_DOMINANT, min_separation=3.0 * resolution)
     frequencies[: len(found)] = found
-    return amplitude, frequencies, frequencies / (shaft_speed / (2.0 * np.pi))
+    return run.wing_amplitude, frequencies, frequencies / (shaft_speed / (2.0 * np.pi))
 
 
 @dataclass(frozen=True)
@@ -127,21 +105,9 @@ def run_speed(params: ModelParams, reduced, reduced_throw) -> SpeedCase:
     return SpeedCase(eigen, amplitude, frequencies, orders, run.real_time_factor)
 
 
-def speed_sweep(model_params: ModelParams, speeds, *, path=None, progress: bool = False,
-                scheduler: str | None = None, workers: int | None = None) -> SweepResult:
-    """Run model_params at every engine speed in `speeds` (rpm) and collect the sweep.
-
-    path: optional HDF5 file for the whole sweep (group /sweep, Campbell in /campbell), written
-    here, by the client. progress: a bar over the finished speeds on stderr.
-    scheduler, workers: where the speeds run (pipelines.distributed.map_cases): None, None is an
-    embedded local cluster with one worker per core; workers=0 runs them in this process.
-    """
-    speeds = np.asarray(speeds, dtype=float)
-    if speeds.ndim != 1 or speeds.size == 0 or np.any(speeds <= 0):
-        raise InputError("sweep speeds must be a non-empty list of positive engine speeds (rpm)")
-    model_params.validate()
-    reduced = reduce_counterweight(model_params.counterweight, model_params.n_modes)
-    reduced_throw = reduce_throw(model_params.throw) if "flexible_crankshaft" in model_params.effects else None
+def collect_sweep(model_params: ModelParams, speeds: np.ndarray, cases: list, reduced) -> SweepResult:
+    """The sweep from its cases: ``cases`` holds per speed a :class:`SpeedCase`, or the message of
+    a case that failed outright (str); the Campbell diagram uses the reduced CW ``reduced``."""
     n = speeds.size
     amplitude = np.full((n, model_params.n_counterweights), np.nan)
     frequencies = np.full((n, N_DOMINANT), np.nan)
@@ -149,17 +115,13 @@ def speed_sweep(model_params: ModelParams, speeds, *, path=None, progress: bool 
     real_time = np.full(n, np.nan)
     system = np.full((n, N_SYSTEM_MODES), np.nan)
     failures = {}
-    cases = [(float(speed), {"params": replace(model_params, speed_rpm=float(speed))}) for speed in speeds]
-    outcomes = map_cases(run_speed, cases, scheduler=scheduler, workers=workers, label="sweep", progress=progress,
-                         shared={"reduced": reduced, "reduced_throw": reduced_throw})
-    for i, outcome in enumerate(outcomes):
-        case = outcome.value
-        if case is None:
-            failures[outcome.key] = outcome.error
+    for i, (speed, case) in enumerate(zip(speeds, cases)):
+        if isinstance(case, str):
+            failures[float(speed)] = case
             continue
         system[i, : case.system_frequencies.size] = case.system_frequencies
         if case.failure is not None:
-            failures[outcome.key] = case.failure
+            failures[float(speed)] = case.failure
             continue
         amplitude[i], frequencies[i], orders[i] = case.wing_amplitude, case.dominant_frequencies, case.dominant_orders
         real_time[i] = case.real_time_factor
@@ -168,14 +130,11 @@ def speed_sweep(model_params: ModelParams, speeds, *, path=None, progress: bool 
     crossings = campbell.system_crossings if n > 1 else []
     half_step = 0.5 * np.min(np.diff(speeds)) if n > 1 else 0.0
     resonance = np.array([any(abs(c["speed_rpm"] - s) <= half_step for c in crossings) for s in speeds])
-    result = SweepResult(
+    return SweepResult(
         speeds_rpm=speeds, wing_amplitude=amplitude, dominant_frequencies=frequencies, dominant_orders=orders,
         real_time_factor=real_time, system_frequencies=system, crossings=crossings, resonance=resonance,
         failures=failures, campbell=campbell,
     )
-    if path is not None:
-        write_sweep(path, result)
-    return result
 
 
 def write_sweep(path, result: SweepResult) -> Path:

@@ -1,1 +1,17 @@
-"""Thin orchestration: scenes, runs, results files, plots and the `fretwork` command line."""
+"""Orchestration: scenes in, runs, studies, results files, plots and the `fretwork` command line.
+
+No physics lives here: each module wires the packages below (reduction, mbs, contact) together.
+
+Modules and sub-packages, in the order data flows through them:
+    scene/         TOML scene -> validated Scene (schema.py: keys, types, validation)
+    examples       the shipped scenes (package data; the repository's examples/ folder)
+    coupling       the [coupling] table: multibody stage, CW inertia patterns, cycle program
+    build          Scene -> Model: meshes, bodies, condensed assembly, law, program, procedure
+    stages         the stage cache (content hash + code fingerprint)
+    parallel       independent cases on dask (local cluster, a scheduler, or in process)
+    jobs/          run, limit, margins, sweep, demo, validate: one command each
+    studies/       accuracy versus cost (accuracy, knobs, accuracy_report), constant vs variable COF
+    output/        results.h5, checkpoints, ParaView files, plots
+    fmu/           load histories as FMUs (table, description, export, cli)
+    cli/           the `fretwork` command line (main, mbs, accuracy)
+"""

@@ -5,16 +5,17 @@ condensation onto retained DOFs and Craig-Bampton reduction for the multibody mo
 Units: mm, N, MPa, t, s.
 
 Modules, in the order data flows through them:
-    mesh_io        read meshes with named node/element sets (Abaqus .inp, Gmsh .msh, scikit-fem)
-    selection      pick nodes by plane, box, cylinder or points
+    mesh.io        read meshes with named node/element sets (Abaqus .inp, Gmsh .msh, scikit-fem)
+    mesh.generators  the shipped meshes (cylinder, plane, blocks, beam with hole, CW and web blocks)
+    mesh.selection   pick nodes and facets by plane, box, ring, cylinder, points or named set
     elasticity     assemble K (N/mm) and M (t): ElasticBody, node-interleaved DOFs
     coupling       RBE2 (kinematic) and RBE3 (distributing) couplings to reference points
     rbe3_condensation   condensed stiffness at RBE3 reference points (bolt bearing areas)
     body_loads     gravity, centrifugal, rigid-body and mode-shape inertia loads via M
+    modal_loads    loads from another model's modes: inertia patterns, wing-mode load
     condensation   exact Schur complement onto retained DOFs, condensed loads, expansion
     craig_bampton  constraint modes + fixed-interface normal modes
     exudyn_bridge  floating-frame modes and ObjectFFRFreducedOrder for exudyn
     report         accuracy against the full model, records and error-vs-modes plot
-    cache          HDF5 cache keyed by mesh, material, retained sets and mode count
     factorization, pardiso   sparse SPD solvers (MKL PARDISO, CHOLMOD, SuperLU)
 """

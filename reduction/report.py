@@ -22,7 +22,7 @@ from reduction.craig_bampton import CraigBampton, craig_bampton
 from reduction.elasticity import assemble_elastic_body
 from reduction.errors import InputError
 from reduction.factorization import factorize
-from reduction.mesh_io import read_mesh
+from reduction.mesh.io import read_mesh
 
 #: eigenvalues below this fraction of the largest computed one are rigid-body modes
 _RIGID_TOLERANCE = 1e-8

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipelines.distributed import map_cases
-from pipelines.limit import run_amplitude
+from pipelines.parallel import map_cases
+from pipelines.jobs.limit import run_amplitude
 
 SCENE = Path(__file__).resolve().parents[2] / "examples" / "counterweight.toml"
 OVERRIDES = {"procedure.cof_cycles": 40, "procedure.wear_cycles": 20}

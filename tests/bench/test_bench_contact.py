@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipelines.bench_report import format_table, relative_difference
+from tests.bench.bench_report import format_table, relative_difference
 
 ROOT = Path(__file__).resolve().parents[2]
 SIDES = [int(s) for s in os.environ.get("FRETWORK_BENCH_SIDES", "20,40,60").split(",")]
@@ -35,7 +35,7 @@ FULL_SIDES = [int(s) for s in os.environ.get("FRETWORK_BENCH_FULL_SIDES", ",".jo
 def _run(side: int, solver: str, folder: Path) -> tuple[dict, dict]:
     fields_path = folder / f"{solver}_{side}.npz"
     env = dict(os.environ, OPENBLAS_NUM_THREADS=THREADS, MKL_NUM_THREADS=THREADS, OMP_NUM_THREADS=THREADS)
-    done = subprocess.run([sys.executable, "-m", "pipelines.bench_report", str(side), solver, str(fields_path)],
+    done = subprocess.run([sys.executable, "-m", "tests.bench.bench_report", str(side), solver, str(fields_path)],
                           cwd=ROOT, capture_output=True, text=True, env=env)
     assert done.returncode == 0, f"{solver} run with {side}² points failed:\n{done.stderr[-3000:]}"
     summary = json.loads(done.stdout.strip().splitlines()[-1])
@@ -49,7 +49,7 @@ def _save(rows: list[dict], started: float) -> None:
     meta = {"machine": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
             "load_average": os.getloadavg(), "wall_time_s": time.time() - started,
             "blas_threads": THREADS,
-            "case": "pipelines.bench_report.flat_on_flat(points_per_side); figures over its last full cycle"}
+            "case": "tests.bench.bench_report.flat_on_flat(points_per_side); figures over its last full cycle"}
     out = ROOT / "results" / "bench" / "contact.json"
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps({"meta": meta, "rows": rows}, indent=2))

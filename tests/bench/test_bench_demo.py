@@ -11,7 +11,7 @@ import os
 
 import pytest
 
-from pipelines.demo import run_demo
+from pipelines.jobs.demo import run_demo
 
 
 @pytest.mark.bench

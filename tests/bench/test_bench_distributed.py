@@ -24,8 +24,9 @@ import pytest
 
 from mbs.counterweight import reduce_counterweight
 from mbs.parameters import ModelParams, SolverParams
-from mbs.sweep import run_speed, speed_sweep
-from pipelines.distributed import cluster, map_cases
+from mbs.sweep import run_speed
+from pipelines.jobs.sweep import speed_sweep
+from pipelines.parallel import cluster, map_cases
 
 ROOT = Path(__file__).resolve().parents[2]
 CYLINDER = ROOT / "examples" / "cylinder_on_plane.toml"

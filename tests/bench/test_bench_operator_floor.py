@@ -4,7 +4,7 @@ operator W (the memory-bandwidth floor), `make bench`.
 The condensed solver works on the dense contact compliance W (3 n_points rows in 3D); every
 residual needs W·λ, so one increment can never cost less than one pass over W (reading
 8·(3 n)² bytes). The ratio "increment / one pass" says how far the solver is from that floor.
-Case: pipelines.bench_report.flat_on_flat (the flat-on-flat benchmark of
+Case: tests.bench.bench_report.flat_on_flat (the flat-on-flat benchmark of
 tests/bench/test_bench_contact.py), 400 and 1,600 contact points (3,600 with
 FRETWORK_BENCH_FLOOR_SIDES=20,40,60: 11.5 GB), increments of its last full cycle; one W pass
 is a dense W @ x (numpy, median of repeats). BLAS on one thread, like the contact benchmark.
@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipelines.bench_report import drive, flat_on_flat
+from tests.bench.bench_report import drive, flat_on_flat
 
 ROOT = Path(__file__).resolve().parents[2]
 SIDES = [int(s) for s in os.environ.get("FRETWORK_BENCH_FLOOR_SIDES", "20,40").split(",")]
@@ -80,7 +80,7 @@ def test_increment_cost_against_one_pass_over_the_condensed_operator():
         rows = [measure(side) for side in SIDES]
     meta = {"machine": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
             "load_average": os.getloadavg(), "wall_time_s": time.time() - started, "blas_threads": 1,
-            "case": "pipelines.bench_report.flat_on_flat(points_per_side); increments of its last full cycle"}
+            "case": "tests.bench.bench_report.flat_on_flat(points_per_side); increments of its last full cycle"}
     out = ROOT / "results" / "bench" / "operator_floor.json"
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps({"meta": meta, "rows": rows}, indent=2))

@@ -14,7 +14,7 @@ from contact.assembly import assemble
 from contact.law import Status
 from contact.solver import ContactSolver
 from contact.structure import ContactSpace
-from pipelines.bench_report import flat_on_flat
+from tests.bench.bench_report import flat_on_flat
 
 TOLERANCE = 1e-6
 

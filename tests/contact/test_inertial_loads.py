@@ -7,7 +7,7 @@ from contact.solver import ContactSolver, Effects
 from contact.structure import ContactSpace
 from pipelines import scene as scenes
 from pipelines.build import build
-from pipelines.validate import SCENE
+from pipelines.jobs.validate import SCENE
 
 DENSITY = 4.43e-9  # t/mm³, Ti-6Al-4V
 BLOCKS = {

@@ -5,7 +5,7 @@ import pytest
 
 from pipelines import scene as scenes
 from pipelines.build import build
-from pipelines.validate import SCENE, check_hertz
+from pipelines.jobs.validate import SCENE, check_hertz
 
 
 def test_hertz_holds_on_non_matching_meshes():

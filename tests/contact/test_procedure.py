@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from contact.procedure import CycleSummary, Procedure, _loosening, _verdict
+from contact.procedure import CycleSummary, Procedure
+from contact.verdict import loosening_evident as _loosening, verdict as _verdict
 
 PROCEDURE = Procedure(loosening_window=10, area_tolerance=0.01)
 

@@ -7,7 +7,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from mbs.model import COUNTERWEIGHT_ROTATION, _half_throw_inertia, simulate, system_eigenfrequencies
+from mbs.items import COUNTERWEIGHT_ROTATION, half_throw_inertia
+from mbs.model import simulate, system_eigenfrequencies
 from mbs.parameters import CrankThrowParams, ModelParams, SolverParams
 from mbs.results import read_histories, write_run
 from mbs.scene import load_model_params
@@ -35,7 +36,7 @@ def throw_polar_inertia(params, reduced, journal_fractions):
     throw = params.throw
     polar = 0.0
     for side, fraction in zip((-1.0, 1.0), journal_fractions):
-        inertia = _half_throw_inertia(throw, side, fraction)
+        inertia = half_throw_inertia(throw, side, fraction)
         com = np.asarray(inertia.COM())
         polar += inertia.InertiaCOM()[2][2] + inertia.Mass() * (com[0] ** 2 + com[1] ** 2)
     nodes = reduced.node_coordinates @ COUNTERWEIGHT_ROTATION.T + [-throw.counterweight_radius, 0.0, 0.0]
@@ -94,7 +95,7 @@ def test_evenly_spaced_throws_by_default_and_angle_tables_must_match_the_throw_c
 
 
 def test_sweep_of_a_two_throw_shaft_reports_every_counterweight():
-    from mbs.sweep import speed_sweep
+    from pipelines.jobs.sweep import speed_sweep
 
     params = ModelParams(n_modes=2, throws=2, effects=frozenset({"gear_mesh"}),
                          solver=SolverParams(revolutions=0.25, time_step=1e-4))

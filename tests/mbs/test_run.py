@@ -19,7 +19,7 @@ def reduced_cw2():
 
 def test_run_writes_the_shared_history_layout_and_plots(tmp_path, reduced_cw2):
     params = ModelParams(n_modes=2, solver=SolverParams(revolutions=2.0, time_step=1e-4))
-    outputs = run_model(params, tmp_path, reduced=reduced_cw2)
+    outputs = run_model(params, tmp_path, bodies=(reduced_cw2, None))
     with h5py.File(outputs.results_file) as root:
         assert root.attrs["fretwork_format"] == "fretwork-results" and root.attrs["format_version"] == 1
         histories = root["histories"]

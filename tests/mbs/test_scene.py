@@ -33,3 +33,14 @@ def test_missing_pressure_keys_are_named(tmp_path):
     scene.write_text('[mbs.gas_pressure]\nfile = "pressure.csv"\n')
     with pytest.raises(InputError, match=r"missing key\(s\) \['bore', 'conrod_length'\]"):
         load_model_params(scene)
+
+
+def test_a_scene_without_an_mbs_table_is_refused_not_run_with_defaults(tmp_path, capsys):
+    from pipelines.cli.main import main
+
+    scene = tmp_path / "contact_only.toml"
+    scene.write_text('[scene]\nname = "contact only"\n')
+    with pytest.raises(InputError, match=r"has no \[mbs\] table"):
+        load_model_params(scene)
+    assert main(["mbs", str(scene), "--out", str(tmp_path / "out")]) == 2
+    assert "no [mbs] table" in capsys.readouterr().err and not (tmp_path / "out").exists()

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 import mbs.sweep as sweep_module
-from mbs.cli import add_sweep_parser
+from pipelines.cli.mbs import add_sweep_parser
 from mbs.model import SimulationError
 from mbs.parameters import CrankThrowParams, ModelParams, SolverParams
-from mbs.sweep import parse_speeds, speed_sweep
+from pipelines.jobs.sweep import parse_speeds, speed_sweep
 from reduction.errors import InputError
 
 
@@ -101,7 +101,7 @@ def test_default_model_resonates_where_the_gear_order_crosses_the_coupled_torsio
 
 
 def test_cli_single_run_writes_histories_and_reports_json(tmp_path, capsys):
-    from mbs.cli import add_run_parser
+    from pipelines.cli.mbs import add_run_parser
 
     scene = tmp_path / "scene.toml"
     scene.write_text('[mbs]\nspeed_rpm = 600\nn_modes = 2\n[mbs.solver]\nrevolutions = 1.0\ntime_step = 1e-4\n')

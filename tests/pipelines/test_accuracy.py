@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from pipelines import scene as scenes
-from pipelines.accuracy import (TOLERANCE, Run, accuracy_study, errors, knobs_for, pareto_front, recommend,
-                                setting_overrides)
-from pipelines.cli import main
+from pipelines.studies.accuracy import accuracy_study
+from pipelines.studies.knobs import TOLERANCE, Run, errors, knobs_for, pareto_front, recommend, setting_overrides
+from pipelines.cli.main import main
 
 
 def _record(label, cpu_time, worst, agrees=True, failure=None):
@@ -107,7 +107,7 @@ def test_a_contact_size_the_mesh_generator_rejects_stops_before_any_run(tmp_path
 
 
 def test_a_failing_combination_steps_back_the_knob_that_erred_most_alone():
-    from pipelines.accuracy import Knob, _step_back
+    from pipelines.studies.knobs import Knob, _step_back
     knobs = [Knob("contact_size", "h", (0.05, 0.1, 0.2), False), Knob("cycle_jump", "J", (1000.0, 2000.0), False)]
     records = [{"varied": ["contact_size"], "settings": {"contact_size": 0.2, "cycle_jump": 1000.0},
                 "worst_error": 0.015},

@@ -10,7 +10,7 @@ import time
 import h5py
 import numpy as np
 
-from pipelines.cli import main
+from pipelines.cli.main import main
 
 
 def _datasets(path):
@@ -34,7 +34,7 @@ def test_kill_and_resume_equals_uninterrupted_run(coarse_cylinder, tmp_path, cap
     assert main(["run", str(scene), "--out", str(reference), "--quiet"]) == 0
 
     interrupted = tmp_path / "interrupted"
-    process = subprocess.Popen([sys.executable, "-m", "pipelines.cli", "run", str(scene), "--out",
+    process = subprocess.Popen([sys.executable, "-m", "pipelines.cli.main", "run", str(scene), "--out",
                                 str(interrupted), "--quiet"], stdout=subprocess.DEVNULL,
                                stderr=subprocess.DEVNULL, env={**os.environ, "MPLBACKEND": "Agg"})
     deadline = time.monotonic() + 120

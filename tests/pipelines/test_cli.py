@@ -7,7 +7,7 @@ import meshio
 import numpy as np
 import pytest
 
-from pipelines.cli import main
+from pipelines.cli.main import main
 
 FIGURES = {"verdict", "stick_area_fraction", "slip_area_fraction", "damaged_area_fraction",
            "worn_area_fraction", "max_wear_depth_mm", "wear_volume_mm3", "dissipated_energy_mJ",

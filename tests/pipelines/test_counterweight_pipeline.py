@@ -8,10 +8,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipelines import coupling, limit as limits, scene as scenes, stages
-from pipelines.build import build, multibody_loading
-from pipelines.cli import main
-from pipelines.meshes import counterweight_block, web_block
+from mbs.loading import cycle_loading
+from pipelines import coupling, scene as scenes, stages
+from reduction import modal_loads
+from pipelines.jobs import limit as limits
+from pipelines.build import build
+from pipelines.coupling import multibody_loading
+from pipelines.cli.main import main
+from reduction.mesh.generators import counterweight_block, web_block
 from reduction.elasticity import assemble_elastic_body
 from reduction.errors import InputError
 from reduction.factorization import factorize
@@ -86,9 +90,9 @@ def test_quasi_static_response_to_the_acceleration_field_reproduces_the_multibod
     g = loading.geometry
     mesh = counterweight_block(g["width"], g["height"], g["thickness"], 260.0, 30.0, 95.0, 2.5, 10.0)
     elastic = assemble_elastic_body(mesh, 210000.0, 0.3, 7.85e-9)
-    patterns = coupling.inertia_patterns(elastic, loading)
+    patterns = modal_loads.inertia_patterns(elastic, loading.modes)
     solve = clamped_solver(mesh, elastic)
-    shapes = coupling.interpolate_modes(loading, elastic.coordinates)
+    shapes = modal_loads.interpolate_modes(loading.modes, elastic.coordinates)
     torsion = np.zeros(elastic.n_dofs)
     torsion[elastic.node_dofs.ravel()] = shapes[:, :, loading.torsion_mode].ravel()
     projector = elastic.mass @ torsion / (torsion @ (elastic.mass @ torsion))
@@ -112,7 +116,8 @@ def test_centrifugal_pattern_carries_the_mass_times_spin_squared_times_radius(lo
     g = loading.geometry
     mesh = counterweight_block(g["width"], g["height"], g["thickness"], 260.0, 30.0, 95.0, 22.0, 20.0)
     elastic = assemble_elastic_body(mesh, 210000.0, 0.3, 7.85e-9)
-    load = coupling.centrifugal_pattern(elastic, loading)
+    load = modal_loads.centrifugal_pattern(
+        elastic, loading.frame_acceleration.mean(axis=0), float(np.mean(loading.angular_velocity[:, 2] ** 2)))
     radial = load[elastic.node_dofs[:, 1]].sum()
     mass = elastic.mass.sum() / 3.0
     centre_y = (elastic.mass @ np.where(np.arange(elastic.n_dofs) % 3 == 1, np.repeat(elastic.coordinates[:, 1], 3), 0.0)).sum() / mass
@@ -127,21 +132,20 @@ def test_wing_mode_pattern_twists_the_held_counterweight_by_one_millimetre_in_th
     mesh = counterweight_block(g["width"], g["height"], g["thickness"], 260.0, 30.0, 95.0, 22.0, 20.0)
     elastic = assemble_elastic_body(mesh, 210000.0, 0.3, 7.85e-9)
     face = np.flatnonzero(np.abs(mesh.p[1]) < 1e-9)
-    load = coupling.wing_mode_pattern(elastic, loading, face)
+    load = modal_loads.wing_mode_pattern(elastic, loading.modes, loading.torsion_mode, loading.torsion_frequency_hz, face)
     displacement = clamped_solver(mesh, elastic)(load)
     assert wing_torsion(elastic, displacement) == pytest.approx(1.0, rel=1e-9)
-    mode = coupling.interpolate_modes(loading, elastic.coordinates)[:, :, loading.torsion_mode].ravel()
+    mode = modal_loads.interpolate_modes(loading.modes, elastic.coordinates)[:, :, loading.torsion_mode].ravel()
     response = displacement[elastic.node_dofs].ravel()
     mac = (mode @ response) ** 2 / ((mode @ mode) * (response @ response))
     assert mac > 0.97  # the static response to the mode's elastic load is the mode (hex vs tet10 meshes)
 
 
 def test_cycle_loading_scales_the_vibration_and_keeps_the_means(loading):
-    settings = coupling.CouplingSettings(body="counterweight", wing_amplitude=0.2)
-    cycle = coupling.cycle_loading(loading, settings, 24)
+    cycle = cycle_loading(loading, "wing_period", 0.2, 24)
     half_range = 0.5 * np.ptp(cycle.tables["wing_mode"])
     assert half_range == pytest.approx(0.2, rel=0.02)  # the sampled sine of amplitude 0.2 mm
-    doubled = coupling.cycle_loading(loading, coupling.CouplingSettings(body="counterweight", wing_amplitude=0.4), 24)
+    doubled = cycle_loading(loading, "wing_period", 0.4, 24)
     for name in ("frame_ax", "mode_1", "alpha_y"):
         mean = cycle.tables[name].mean()
         assert doubled.tables[name].mean() == pytest.approx(mean, rel=1e-9, abs=1e-9 * np.abs(cycle.tables[name]).max())
@@ -181,7 +185,7 @@ def test_multibody_effect_without_coupling_is_reported():
         scenes.parse(text)
 
 
-def _fake_run(scene_path, overrides, amplitude_mm, cache_dir, out_dir=None):
+def _fake_run(scene_path, overrides, amplitude_mm, cache_dir, out_dir=None, models=None):
     """Stand-in for a contact run: stuck below 0.2637 mm (counts its calls in a file)."""
     with open(Path(cache_dir) / "calls.txt", "a") as stream:
         stream.write(f"{amplitude_mm}\n")
@@ -215,7 +219,7 @@ def test_sweep_without_margins_never_builds_the_contact_model(tmp_path, monkeypa
         raise AssertionError("the contact model was built")
 
     monkeypatch.setattr(build_module, "build", refuse)
-    monkeypatch.setattr(build_module, "multibody_loading", refuse)
+    monkeypatch.setattr(coupling, "multibody_loading", refuse)
     before = dict(stages.EXECUTIONS)
     scene = tmp_path / "cw.toml"
     text = SCENE.read_text().replace("n_modes = 6", "n_modes = 2").replace("revolutions = 3.0", "revolutions = 0.5")
@@ -227,7 +231,7 @@ def test_sweep_without_margins_never_builds_the_contact_model(tmp_path, monkeypa
 
 def test_stages_with_unchanged_inputs_are_read_from_the_cache(tmp_path, monkeypatch):
     calls = []
-    monkeypatch.setattr(coupling, "run_multibody", lambda params, cw: calls.append(params) or "histories")
+    monkeypatch.setattr(coupling, "counterweight_loading", lambda params, cw: calls.append(params) or "histories")
     scene = scenes.load(SCENE, COARSE)
     cache = stages.StageCache(tmp_path)
     before = stages.EXECUTIONS["multibody"]

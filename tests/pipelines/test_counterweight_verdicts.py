@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from pipelines import scene as scenes
-from pipelines.run import run_scene
+from pipelines.jobs.run import run_scene
 from pipelines.stages import StageCache
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"

@@ -10,11 +10,11 @@ import time
 import numpy as np
 import pytest
 
-import pipelines.distributed as distributed
-from mbs.cli import add_sweep_parser
+import pipelines.parallel as distributed
+from pipelines.cli.mbs import add_sweep_parser
 from mbs.parameters import ModelParams, SolverParams
-from mbs.sweep import speed_sweep
-from pipelines.distributed import CaseOutcome, add_cluster_arguments, cluster, map_cases
+from pipelines.jobs.sweep import speed_sweep
+from pipelines.parallel import CaseOutcome, add_cluster_arguments, cluster, map_cases
 from reduction.errors import InputError
 
 
@@ -121,7 +121,7 @@ def test_mbs_sweep_on_two_workers_equals_the_serial_sweep():
 
 
 def test_accuracy_study_records_do_not_depend_on_where_the_runs_ran(coarse_cylinder):
-    from pipelines.accuracy import accuracy_study
+    from pipelines.studies.accuracy import accuracy_study
 
     sweeps = {"contact_size": [0.2], "increments_per_cycle": [12, 6], "normal_stiffness": [4.0e6, 4.0e5],
               "critical_slip": [1.0e-3], "cycle_jump": [1000.0]}

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from contact import procedure
+from contact import procedure, verdict
 from contact.solver import ContactSolver
 from contact.structure import ContactSpace
 from pipelines import scene as scenes
@@ -81,7 +81,7 @@ def test_sliding_area_ignores_points_worn_out_of_contact_and_slips_far_below_cri
     cof = np.array([0.7, 0.7, 0.2, 0.7])
     slip = np.array([2e-3, 0.0, 2e-3, 1e-9])
     dissipation = cof * pressure * slip
-    fraction = procedure.active_slip_area_fraction(area, 4.0, pressure, dissipation, cof, 1e-3, 0.1)
+    fraction = verdict.active_slip_area_fraction(area, 4.0, pressure, dissipation, cof, 1e-3, 0.1)
     assert fraction == pytest.approx(0.25)
 
 

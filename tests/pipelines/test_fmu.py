@@ -14,12 +14,8 @@ import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from pipelines.fmu import (
-    SourceOnlyFmuWarning,
-    add_export_fmu_parser,
-    export_fmu,
-    main_export,
-)
+from pipelines.fmu.cli import add_export_fmu_parser, main_export
+from pipelines.fmu.export import SourceOnlyFmuWarning, export_fmu
 from reduction.errors import InputError
 
 OUTPUT_INTERVAL = 1.0 / 256.0

@@ -7,7 +7,7 @@ import skfem
 
 from pipelines import scene as scenes
 from pipelines.build import build
-from pipelines.validate import SCENE
+from pipelines.jobs.validate import SCENE
 from reduction.errors import InputError
 
 

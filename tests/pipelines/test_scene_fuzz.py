@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pipelines import scene as scenes
-from pipelines.cli import main
+from pipelines.cli.main import main
 from reduction.errors import InputError
 
 # CI replays a fixed set of examples (a landing never depends on a lucky draw); local runs

@@ -6,7 +6,7 @@ must fail this test and show in review.
 
 import pytest
 
-from pipelines.validate import run_validation
+from pipelines.jobs.validate import run_validation
 
 #: (case, start of the quantity's name) → relative tolerance of the check.
 PINNED = {

@@ -9,8 +9,8 @@ from skfem.io.meshio import to_meshio
 from reduction.condensation import condense
 from reduction.elasticity import assemble_elastic_body
 from reduction.errors import InputError
-from reduction.mesh_io import from_skfem, read_mesh
-from reduction.selection import nodes_at_points, nodes_in_box, nodes_on_cylinder, nodes_on_plane
+from reduction.mesh.io import from_skfem, read_mesh
+from reduction.mesh.selection import nodes_at_points, nodes_in_box, nodes_on_cylinder, nodes_on_plane
 
 LENGTH, WIDTH, HEIGHT = 60.0, 10.0, 10.0
 

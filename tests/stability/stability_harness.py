@@ -33,7 +33,7 @@ from contact.procedure import IncrementRecord, Observer
 from contact.solver import ContactSolver, Effects, NewtonSettings
 from contact.structure import ContactSpace
 from pipelines import scene as scenes
-from pipelines.bench_report import flat_on_flat
+from tests.bench.bench_report import flat_on_flat
 from pipelines.build import build
 
 SCENE = Path(__file__).resolve().parents[2] / "examples" / "cylinder_on_plane.toml"

@@ -216,22 +216,35 @@ def grid_lines(start: float, end: float, breaks, fine: tuple[float, float], fine
     return coordinates
 
 
+def cells_inside(mesh, boxes) -> np.ndarray:
+    """Boolean mask of the cells of ``mesh`` whose centroid lies strictly inside one of ``boxes``
+    (each ((x0, y0, z0), (x1, y1, z1)) in mm)."""
+    centroid = mesh.p[:, mesh.t].mean(axis=1).T
+    mask = np.zeros(len(centroid), dtype=bool)
+    for low, high in boxes:
+        mask |= np.all((centroid > np.asarray(low)) & (centroid < np.asarray(high)), axis=1)
+    return mask
+
+
 def union_of_boxes(x: np.ndarray, y: np.ndarray, z: np.ndarray, solids, voids=()) -> skfem.MeshHex:
     """Hexahedral mesh of the tensor grid x × y × z restricted to the union of ``solids`` minus
     ``voids`` (each box ((x0, y0, z0), (x1, y1, z1)) in mm; box faces should lie on grid lines)."""
     mesh = skfem.MeshHex.init_tensor(x, y, z)
-    centroid = mesh.p[:, mesh.t].mean(axis=1).T
-
-    def inside(boxes):
-        mask = np.zeros(len(centroid), dtype=bool)
-        for low, high in boxes:
-            mask |= np.all((centroid > np.asarray(low)) & (centroid < np.asarray(high)), axis=1)
-        return mask
-
-    keep = inside(solids) & ~inside(voids)
+    keep = cells_inside(mesh, solids) & ~cells_inside(mesh, voids)
     if not keep.any():
         raise InputError("the boxes of the mesh contain no grid cell")
     return mesh.remove_elements(np.flatnonzero(~keep))
+
+
+def counterweight_solids(width: float, height: float, thickness: float, hub_width: float, hub_height: float):
+    """The generic counterweight's shape in its own frame, as two boxes (mm): the hub
+    |x| ≤ hub_width/2, 0 ≤ y ≤ hub_height under the contact face y = 0, and the wing plate
+    |x| ≤ width/2, hub_height ≤ y ≤ height; thickness along z. The one definition of the CW's
+    shape: the multibody mesh (mbs.counterweight) and the contact mesh (:func:`counterweight_block`)
+    are both cut from it."""
+    half_hub, half_t = 0.5 * hub_width, 0.5 * thickness
+    return [((-half_hub, 0.0, -half_t), (half_hub, hub_height, half_t)),
+            ((-0.5 * width, hub_height, -half_t), (0.5 * width, height, half_t))]
 
 
 def counterweight_block(width: float, height: float, thickness: float, hub_width: float, hub_height: float,
@@ -253,11 +266,9 @@ def counterweight_block(width: float, height: float, thickness: float, hub_width
                    contact_size, coarse)
     y = grid_lines(0.0, height, [hub_height], (0.0, min(2.0 * contact_size, hub_height)), contact_size, coarse)
     z = grid_lines(-half_t, half_t, [-hole_half_size, hole_half_size], (-half_t, half_t), contact_size, coarse)
-    solids = [((-half_hub, 0.0, -half_t), (half_hub, hub_height, half_t)),
-              ((-0.5 * width, hub_height, -half_t), (0.5 * width, height, half_t))]
     voids = [((s * screw_x - hole_half_size, -1.0, -hole_half_size),
               (s * screw_x + hole_half_size, height + 1.0, hole_half_size)) for s in (-1, 1)]
-    return union_of_boxes(x, y, z, solids, voids)
+    return union_of_boxes(x, y, z, counterweight_solids(width, height, thickness, hub_width, hub_height), voids)
 
 
 def web_block(width: float, depth: float, thickness: float, hub_width: float, screw_x: float,

@@ -29,7 +29,7 @@ from skfem.models.elasticity import lame_parameters, linear_elasticity
 from contact.assembly import Body, ReferencePoint
 from contact.law import ContactLaw, ContactState
 from contact.solver import Effects
-from pipelines.meshes import flat_block
+from reduction.mesh.generators import flat_block
 from reduction.elasticity import ElasticBody
 
 
@@ -236,7 +236,7 @@ def format_table(rows: list[dict]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m pipelines.bench_report POINTS_PER_SIDE SOLVER FIELDS.npz``: one run, JSON summary on stdout."""
+    """``python -m tests.bench.bench_report POINTS_PER_SIDE SOLVER FIELDS.npz``: one run, JSON summary on stdout."""
     import argparse
 
     parser = argparse.ArgumentParser(description=main.__doc__)

@@ -11,17 +11,38 @@ from __future__ import annotations
 
 import json
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
 
 from mbs.model import SimulationError
+from mbs.parameters import ModelParams
 from mbs.plots import plot_campbell, plot_sweep
 from mbs.run import run_model
-from mbs.scene import load_model_params
-from mbs.sweep import parse_speeds, speed_sweep
-from pipelines.distributed import add_cluster_arguments
+from pipelines.jobs.sweep import parse_speeds, speed_sweep
+from pipelines.parallel import add_cluster_arguments
 from reduction.errors import InputError
+
+
+def model_params(path) -> ModelParams:
+    """The multibody model of a scene file: a coupled scene's [mbs] table with the multibody
+    effects of its 'scene.effects', else the [mbs] table alone; a scene without [mbs] is refused."""
+    from mbs.scene import load_model_params
+    from pipelines import scene as scenes
+    from pipelines.coupling import multibody_params
+
+    try:
+        is_coupled = "coupling" in tomllib.loads(Path(path).read_text())
+    except (OSError, tomllib.TOMLDecodeError):
+        is_coupled = False  # load_model_params says what is wrong with the file
+    if not is_coupled:
+        return load_model_params(path)
+    scene = scenes.load(path)
+    if "mbs" not in scene.data:
+        raise InputError(f"{path} has no [mbs] table: it does not describe a multibody model "
+                         "(an empty [mbs] table runs the default generic engine)")
+    return multibody_params(scene)
 
 
 def add_sweep_parser(subparsers):
@@ -57,7 +78,7 @@ def _table(result) -> str:
 def run_sweep(args) -> int:
     """Run the sweep described by parsed args; 0 if at least one speed converged, 1 if none, 2 on bad input."""
     try:
-        params = load_model_params(args.scene)
+        params = model_params(args.scene)
         speeds = parse_speeds(args.speeds)
         result = speed_sweep(params, speeds, path=args.out, progress=True, scheduler=args.scheduler,
                              workers=args.workers)
@@ -93,7 +114,7 @@ def add_run_parser(subparsers):
 def run_single(args) -> int:
     """One run; 0 on success, 1 if the time integration failed, 2 on bad input."""
     try:
-        params = load_model_params(args.scene)
+        params = model_params(args.scene)
     except InputError as error:
         print(f"fretwork mbs: {error}", file=sys.stderr)
         return 2
@@ -103,12 +124,11 @@ def run_single(args) -> int:
         print(f"fretwork mbs: {error}", file=sys.stderr)
         return 1
     histories = outputs.histories
-    steady = histories.wing_torsion[:, len(histories.time) // 2:]
     summary = {
         "file": str(outputs.results_file),
         "plots": {name: str(path) for name, path in outputs.plots.items()},
         "speed_rpm": params.speed_rpm,
-        "wing_torsion_amplitude_mm": (0.5 * (steady.max(axis=1) - steady.min(axis=1))).tolist(),
+        "wing_amplitude_mm": histories.wing_amplitude.tolist(),
         "torsion_mode_hz": outputs.reduced.torsion_frequency,
         "real_time_factor": histories.real_time_factor,
         "time_step_s": params.solver.time_step,

@@ -20,8 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-DEFAULT_SCENE = EXAMPLES / "counterweight.toml"
+from pipelines import examples
+
+DEFAULT_SCENE = examples.scene_path("counterweight")
 DEMO_OVERRIDES = {
     "procedure.cof_cycles": 60,
     "procedure.wear_cycles": 30,
@@ -42,12 +43,12 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
              amplitude_range_mm=DEMO_AMPLITUDE_RANGE_MM, tolerance_mm=DEMO_TOLERANCE_MM, cache_dir=None,
              workers=None, progress=True) -> DemoResult:
     """Run the five stages (module doc) into ``out_dir``; returns the summary and stage times (s)."""
-    from mbs.sweep import speed_sweep
+    from pipelines.jobs.sweep import speed_sweep
     from pipelines import scene as scenes
-    from pipelines.build import multibody_params
-    from pipelines.limit import find_limit, plot_limit, write_limit
-    from pipelines.margins import margins_of, plot_margins, write_margins
-    from pipelines.run import run_scene
+    from pipelines.coupling import multibody_params
+    from pipelines.jobs.limit import find_limit, plot_limit, write_limit
+    from pipelines.jobs.margins import margins_of, plot_margins, write_margins
+    from pipelines.jobs.run import run_scene
     from pipelines.stages import StageCache
 
     out_dir = Path(out_dir)

@@ -9,7 +9,7 @@ safer verdict. It evaluates the ends of the range first, then narrows the bracke
 [largest stuck amplitude, smallest amplitude that is not stuck] in rounds of as many
 amplitudes as there are workers (one worker: bisection), until the bracket is no wider than
 the tolerance. The limit reported is the bracket's lower end: an amplitude that was run and
-found stuck. Runs are independent cases (:func:`pipelines.distributed.map_cases`) and each
+found stuck. Runs are independent cases (:func:`pipelines.parallel.map_cases`) and each
 is cached (stage ``contact_run``), so a repeated or extended search only runs new amplitudes.
 
 Amplitudes in mm internally; the command line takes µm, as engineers quote wing amplitudes.
@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from contact.verdict import Ending
 from reduction.errors import InputError
 
 SAFE = "stick"
@@ -90,49 +91,64 @@ def coupled_scene(scene_path, overrides: dict | None = None):
     return scene
 
 
-_built: dict = {}  # the last condensed model of this process: stage key → Model (not picklable)
+class BuiltModels:
+    """The condensed model of each scene a limit search has built, kept for its next amplitudes.
+
+    One instance belongs to one search (:func:`find_limit` creates it and hands it to every
+    case): a process that runs several amplitudes of the search builds the model once. The model
+    holds factorisations that cannot be pickled, so it is not a stage of the stage cache."""
+
+    def __init__(self):
+        self._models = {}
+
+    def __getstate__(self):  # sent to a worker empty: a worker builds its own copy once per round
+        return {"_models": {}}
+
+    def model(self, scene, cache):
+        from pipelines.build import build
+        from pipelines.stages import stage_key
+
+        key = stage_key("contact_model", scene.data)
+        if key not in self._models:
+            self._models = {key: build(scene, cache=cache)}
+        return self._models[key]
 
 
-def _condensed_model(scene, cache):
-    """The scene's built model, kept for the next amplitude in this process (a worker runs many)."""
-    from pipelines.build import build
-    from pipelines.stages import stage_key
-
-    key = stage_key("contact_model", scene.data)
-    if key not in _built:
-        _built.clear()
-        _built[key] = build(scene, cache=cache)
-    return _built[key]
+#: Runs that stop on a failed increment and still answer the search: the joint is not stuck.
+STOPPED = {Ending.SLID_OFF: "the CW slides off: tangential equilibrium lost",
+           Ending.WEAR_RUNAWAY: "runaway wear: the wear phase slid by itself at the scene's cycle jump"}
 
 
 def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_dir: str | None,
-                  out_dir: str | None = None) -> AmplitudeRun:
-    """One contact run of the scene at a wing amplitude (mm); a case of the limit search."""
+                  out_dir: str | None = None, models: BuiltModels | None = None) -> AmplitudeRun:
+    """One contact run of the scene at a wing amplitude (mm); a case of the limit search.
+
+    models: the search's built models (built here when None). A run that stops because the CW
+    slid off or its wear ran away counts as ``loosening`` (:data:`STOPPED`); any other failed
+    run is an error."""
     import tempfile
     from contextlib import nullcontext
 
-    from contact.solver import ConvergenceError
-    from pipelines.build import coupled_program
-    from pipelines.run import run_model
+    from contact.procedure import RunStopped
+    from pipelines.coupling import coupled_program
+    from pipelines.jobs.run import run_model
     from pipelines.stages import StageCache
 
     scene = coupled_scene(scene_path, overrides)
     cache = StageCache(cache_dir)
+    models = models or BuiltModels()
 
     def compute() -> AmplitudeRun:
-        model = coupled_program(_condensed_model(scene, cache), amplitude_mm)
+        model = coupled_program(models.model(scene, cache), amplitude_mm)
         folder = nullcontext(Path(out_dir) / f"amplitude_{1e3 * amplitude_mm:07.2f}um") if out_dir \
             else tempfile.TemporaryDirectory()
         try:
             with folder as where:
                 outcome = run_model(model, Path(where), progress=False, plots=False)
-        except ConvergenceError as error:
-            if "tangential equilibrium is lost" in str(error):
-                return AmplitudeRun(amplitude_mm, "loosening", {"note": "the CW slides off: tangential equilibrium lost"})
-            if "wear increment stays above the cap" in str(error):
-                return AmplitudeRun(amplitude_mm, "loosening",
-                                    {"note": "runaway wear: the wear phase slid by itself at the scene's cycle jump"})
-            return AmplitudeRun(amplitude_mm, None, {}, f"ConvergenceError: {error}")
+        except RunStopped as stopped:
+            if stopped.ending in STOPPED:
+                return AmplitudeRun(amplitude_mm, "loosening", {"note": STOPPED[stopped.ending]})
+            return AmplitudeRun(amplitude_mm, None, {}, f"ConvergenceError: {stopped}")
         summary = {k: v for k, v in outcome.summary.items() if isinstance(v, (int, float, str, type(None)))}
         return AmplitudeRun(amplitude_mm, outcome.summary["verdict"], summary)
 
@@ -146,7 +162,7 @@ def find_limit(scene_path, low_mm: float, high_mm: float, *, tolerance_mm: float
     """Bracket and narrow the stick limit of the wing amplitude on [low_mm, high_mm] (module doc)."""
     from dask.system import cpu_count
 
-    from pipelines.distributed import cluster, map_cases
+    from pipelines.parallel import cluster, map_cases
 
     coupled_scene(scene_path, overrides)  # bad input is said before any run
     if not 0 < low_mm < high_mm:
@@ -165,12 +181,14 @@ def find_limit(scene_path, low_mm: float, high_mm: float, *, tolerance_mm: float
 def _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out_dir, where, parallel,
             progress, map_cases) -> LimitResult:
     runs: dict[float, AmplitudeRun] = {}
+    models = BuiltModels()
 
     def evaluate(amplitudes, label):
         cases = [(float(a), {"scene_path": str(scene_path), "overrides": overrides or {}, "amplitude_mm": float(a),
                              "cache_dir": None if cache_dir is None else str(cache_dir),
                              "out_dir": None if out_dir is None else str(out_dir)}) for a in amplitudes]
-        for outcome in map_cases(run_amplitude, cases, label=label, progress=progress, **where):
+        for outcome in map_cases(run_amplitude, cases, label=label, progress=progress, shared={"models": models},
+                                 **where):
             runs[outcome.key] = outcome.value if outcome.error is None else \
                 AmplitudeRun(outcome.key, None, {}, outcome.error)
         failed = [runs[a] for a in amplitudes if runs[a].verdict is None]

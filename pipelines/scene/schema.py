@@ -1,22 +1,19 @@
-"""Scene files: TOML in, a validated :class:`Scene` out.
+"""The keys of a scene file, their types, ranges and meaning, and the validation of a parsed scene.
 
-A scene names its bodies (mesh, material, supports, reference points), the contact
-interface and its law, the load and motion patterns with their time histories, the
-procedure, and the *effects* it wants (``cof_evolution``, ``wear``). Validation reports every
-problem at once, each naming its key, and nothing is built before the scene is valid.
+:func:`validate` checks the schema table by table, then the cross-references (bodies,
+materials, reference points, selections, effects) of the tables the schema found sound, and
+returns every problem at once, each a sentence naming its key, with "did you mean" for typos.
 Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
 """
 
 from __future__ import annotations
 
 import difflib
-import tomllib
-from dataclasses import dataclass
-from pathlib import Path
 
-from reduction.errors import InputError
 
 CONTACT_EFFECTS = ("cof_evolution", "wear", "bolts")
+
+
 # effects of the multibody-driven loading, valid with a [coupling] table: the CW's modal
 # (flexible) inertia, the spin's centrifugal part, and the multibody model's own effects
 COUPLING_EFFECTS = ("flexible_counterweight", "centrifugal")
@@ -121,6 +118,8 @@ SCHEMA = {
         "checkpoint_every": (int, False, _integer_at_least(0), "write checkpoint.h5 every n cycles (0: never)"),
     },
 }
+
+
 PATTERN_KEYS = {
     "name": (str, True, None, "pattern name"),
     "dof": (str, True, None, "control DOF 'body.point.component'"),
@@ -128,6 +127,8 @@ PATTERN_KEYS = {
     "history": (str, True, lambda v: None if v in ("ramp", "cyclic", "constant") else
                 "must be 'ramp', 'cyclic' or 'constant'", "time shape"),
 }
+
+
 # [mbs] is the multibody model's table, validated by mbs.scene.
 BODY_LOAD_KEYS = {
     "name": (str, True, None, "pattern name"),
@@ -140,32 +141,13 @@ BODY_LOAD_KEYS = {
     "history": (str, True, lambda v: None if v in ("ramp", "cyclic", "constant") else
                 "must be 'ramp', 'cyclic' or 'constant'", "time shape"),
 }
+
+
 TOP_LEVEL = ("scene", "materials", "bodies", "bolts", "contact", "loads", "motions", "body_loads",
              "procedure", "mbs", "coupling")
+
+
 OPTIONAL_TABLES = ("bolts",)
-
-
-@dataclass(frozen=True)
-class Scene:
-    """A validated scene: the parsed TOML tables and where it came from."""
-
-    data: dict
-    path: Path | None
-
-    @property
-    def name(self) -> str:
-        return self.data["scene"]["name"]
-
-    @property
-    def effects(self) -> frozenset:
-        return frozenset(self.data["scene"]["effects"])
-
-    @property
-    def dimension(self) -> int:
-        return self.data["scene"]["dimension"]
-
-    def section(self, name: str) -> dict:
-        return self.data.get(name, {})
 
 
 def _suggest(key: str, known) -> str:
@@ -173,10 +155,14 @@ def _suggest(key: str, known) -> str:
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 
-def _check_table(table, schema, where, problems):
+def _check_table(table, schema, where, problems) -> bool:
+    """Report the table's problems; True when its structure is sound: a table with every required
+    key, and every key that is not a number of the right type (numbers out of range or of the
+    wrong type are problems, but the cross-reference checks do not read them as containers)."""
     if not isinstance(table, dict):
         problems.append(f"'{where}' must be a table")
-        return
+        return False
+    sound = True
     for key in table:
         if key not in schema:
             problems.append(f"unknown key '{where}.{key}'{_suggest(key, schema)}")
@@ -184,22 +170,29 @@ def _check_table(table, schema, where, problems):
         if key not in table:
             if required:
                 problems.append(f"missing key '{where}.{key}' ({meaning})")
+                sound = False
             continue
         value = table[key]
         if isinstance(value, bool) and types is not bool and bool not in (types if isinstance(types, tuple) else (types,)):
             problems.append(f"'{where}.{key}' must be a number, got {value!r}")
+            sound = sound and types is NUMBER
             continue
         if not isinstance(value, types):
             expected = types.__name__ if isinstance(types, type) else "number"
             problems.append(f"'{where}.{key}' must be a {expected} ({meaning}), got {value!r}")
+            sound = sound and types is NUMBER
             continue
         if check is not None:
             message = check(value)
             if message:
                 problems.append(f"'{where}.{key}' {message} ({meaning}), got {value!r}")
+    return sound
 
 
 def _check_selection(selection, where, dim, problems):
+    if not isinstance(selection, dict):
+        problems.append(f"'{where}' must be a table (a selection: box, boxes, axis and value, ring or set)")
+        return
     keys = set(selection) - {"body"}
     if not keys:
         problems.append(f"'{where}' needs a selection: box = [[min...], [max...]], boxes = [box, ...], axis = ... with "
@@ -236,14 +229,20 @@ def _check_selection(selection, where, dim, problems):
 
 
 def validate(data: dict, source: str = "scene") -> list[str]:
-    """All problems of a parsed scene, each a sentence naming its key; empty when valid."""
+    """All problems of a parsed scene, each a sentence naming its key; empty when valid.
+
+    The schema is checked first, table by table; each semantic check (cross-references, effects,
+    selections) then runs when the tables it reads are sound in structure (:func:`_check_table`):
+    a malformed table has been reported, and its cross-references cannot be followed."""
     problems: list[str] = []
     for key in data:
         if key not in TOP_LEVEL:
             problems.append(f"unknown table '{key}'{_suggest(key, TOP_LEVEL)}")
+    broken = set()
     for section in ("scene", "contact"):
         if section not in data:
             problems.append(f"missing table '[{section}]'")
+            broken.add(section)
     for section, schema in SCHEMA.items():
         if section.endswith(".*"):
             parent = section[:-2]
@@ -252,16 +251,16 @@ def validate(data: dict, source: str = "scene") -> list[str]:
                 continue
             if not isinstance(entries, dict) or not entries:
                 problems.append(f"'[{parent}]' must define at least one named entry")
+                broken.add(parent)
                 continue
-            for name, table in entries.items():
-                _check_table(table, schema, f"{parent}.{name}", problems)
-        elif section in data:
-            _check_table(data[section], schema, section, problems)
-    for check in (_check_effects, _check_bodies, _check_contact, _check_bolts, _check_patterns):
-        try:
+            sound = [_check_table(table, schema, f"{parent}.{name}", problems) for name, table in entries.items()]
+            if not all(sound):
+                broken.add(parent)
+        elif section in data and not _check_table(data[section], schema, section, problems):
+            broken.add(section)
+    for check, tables in SEMANTIC_CHECKS:
+        if not broken.intersection(tables):
             check(data, problems)
-        except (KeyError, TypeError, AttributeError, ValueError):
-            pass  # a malformed table was already reported by the schema check above
     return problems
 
 
@@ -290,7 +289,7 @@ def _check_patterns(data, problems):
         if isinstance(name, str) and name in names:
             problems.append(f"'body_loads[{k}].name' '{name}' is used twice")
         names.add(name if isinstance(name, str) else f"<body_loads[{k}]>")
-        body = data.get("bodies", {}).get(entry.get("body"))
+        body = data.get("bodies", {}).get(entry["body"]) if isinstance(entry.get("body"), str) else None
         if body is None:
             problems.append(f"'body_loads[{k}].body' must name one of the bodies")
         elif "density" not in data.get("materials", {}).get(body.get("material"), {}):
@@ -334,7 +333,9 @@ def _check_bodies(data, problems):
         mesh = body["mesh"]
         if "generator" in mesh:
             generator = mesh["generator"]
-            if generator not in MESH_GENERATORS:
+            if not isinstance(generator, str):
+                problems.append(f"'bodies.{name}.mesh.generator' must name a generator ({', '.join(MESH_GENERATORS)})")
+            elif generator not in MESH_GENERATORS:
                 problems.append(f"'bodies.{name}.mesh.generator' '{generator}' is unknown"
                                 f"{_suggest(generator, MESH_GENERATORS)}")
             else:
@@ -349,11 +350,15 @@ def _check_bodies(data, problems):
                 problems.append(f"'bodies.{name}.fixed.nodes' is missing (a selection)")
             else:
                 _check_selection(fixed["nodes"], f"bodies.{name}.fixed.nodes", dim, problems)
-            for comp in fixed.get("components", []):
+            components = fixed.get("components", [])
+            for comp in components if isinstance(components, list) else [components]:
                 if comp not in ("ux", "uy", "uz")[:dim]:
                     problems.append(f"'bodies.{name}.fixed.components' has '{comp}'; use ux, uy{', uz' if dim == 3 else ''}")
         for ref_name, ref in body.get("reference_points", {}).items():
             where = f"bodies.{name}.reference_points.{ref_name}"
+            if not isinstance(ref, dict):
+                problems.append(f"'{where}' must be a table {{ nodes = selection, position = [...] }}")
+                continue
             for key in ref:
                 if key not in ("nodes", "position", "rotations"):
                     problems.append(f"unknown key '{where}.{key}'{_suggest(key, ['nodes', 'position', 'rotations'])}")
@@ -371,10 +376,11 @@ def _check_contact(data, problems):
     contact = data["contact"]
     for role in ("slave", "master"):
         selection = contact[role]
-        if selection.get("body") not in bodies:
+        if not isinstance(selection.get("body"), str) or selection["body"] not in bodies:
             problems.append(f"'contact.{role}.body' must name one of the bodies ({', '.join(bodies)})")
         _check_selection(selection, f"contact.{role}", dim, problems)
-    if contact["cof_max"] < contact["cof_initial"]:
+    if (isinstance(contact["cof_max"], NUMBER) and isinstance(contact["cof_initial"], NUMBER)
+            and contact["cof_max"] < contact["cof_initial"]):
         problems.append("'contact.cof_max' must be >= 'contact.cof_initial'")
     wear = contact.get("wear_coefficients", [0.0, 0.0])
     if len(wear) != 2 or not all(isinstance(w, NUMBER) and w >= 0 for w in wear):
@@ -402,65 +408,9 @@ def _check_bolts(data, problems):
                 problems.append(f"'bolts.{name}.{end}' names '{bolt[end]}', which is not a reference point")
 
 
-def parse(text: str, source: str = "scene", path: Path | None = None) -> Scene:
-    """Parse and validate TOML text; raises :class:`InputError` listing every problem."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise InputError(f"{source}: not valid TOML: {error}") from None
-    problems = validate(data, source)
-    if problems:
-        raise InputError(f"{source}: " + ("\n  - ".join([f"{len(problems)} problem(s):"] + problems)
-                                          if len(problems) > 1 else problems[0]))
-    return Scene(data, path)
-
-
-def _merged(base: dict, own: dict) -> dict:
-    """``own`` on top of ``base``: tables merge key by key, anything else is replaced."""
-    out = dict(base)
-    for key, value in own.items():
-        out[key] = _merged(base[key], value) if isinstance(value, dict) and isinstance(base.get(key), dict) else value
-    return out
-
-
-def _read(path: Path, seen: tuple = ()) -> dict:
-    """The TOML of a scene file with its ``scene.base`` chain resolved (relative to the file)."""
-    if not path.is_file():
-        raise InputError(f"scene file {path} does not exist")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as error:
-        raise InputError(f"{path}: not valid TOML: {error}") from None
-    base = data.get("scene", {}).get("base") if isinstance(data.get("scene"), dict) else None
-    if base is None:
-        return data
-    base_path = (path.parent / base).resolve()
-    if base_path in seen:
-        raise InputError(f"{path}: 'scene.base' chain loops back to {base_path}")
-    merged = _merged(_read(base_path, seen + (base_path,)), data)
-    del merged["scene"]["base"]
-    return merged
-
-
-def load(path: str | Path, overrides: dict | None = None) -> Scene:
-    """Read a scene file (and the file its ``scene.base`` extends); ``overrides``
-    {"procedure.wear_cycles": 5, ...} replace values before validation."""
-    path = Path(path)
-    data = _read(path)
-    if overrides:
-        apply_overrides(data, overrides)
-    problems = validate(data, str(path))
-    if problems:
-        raise InputError(f"{path}: " + ("\n  - ".join([f"{len(problems)} problem(s):"] + problems)
-                                        if len(problems) > 1 else problems[0]))
-    return Scene(data, path)
-
-
-def apply_overrides(data: dict, overrides: dict) -> None:
-    """Set dotted keys in place, e.g. {"bodies.plane.mesh.contact_size": 0.1}."""
-    for dotted, value in overrides.items():
-        node = data
-        *parents, leaf = dotted.split(".")
-        for key in parents:
-            node = node.setdefault(key, {})
-        node[leaf] = value
+#: Semantic checks and the tables each reads (run when the schema found those tables sound).
+SEMANTIC_CHECKS = ((_check_effects, ("scene", "materials", "bodies", "coupling")),
+                   (_check_bodies, ("scene", "materials", "bodies")),
+                   (_check_contact, ("scene", "bodies", "contact")),
+                   (_check_bolts, ("scene", "bodies", "bolts")),
+                   (_check_patterns, ("materials", "bodies")))

@@ -11,8 +11,6 @@ import numpy as np
 
 from reduction.errors import InputError
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-
 
 def _json(value) -> str:
     return json.dumps(value, indent=2, default=float)
@@ -32,7 +30,7 @@ def _add_cache_arguments(parser) -> None:
 
 def cmd_run(args) -> int:
     from pipelines import scene
-    from pipelines.run import run_scene
+    from pipelines.jobs.run import run_scene
     from pipelines.stages import StageCache
 
     loaded = scene.load(args.scene)
@@ -76,7 +74,7 @@ def _human_summary(outcome) -> str:
 
 
 def cmd_validate(args) -> int:
-    from pipelines.validate import run_validation
+    from pipelines.jobs.validate import run_validation
 
     records = run_validation(quick=args.quick, out_dir=Path(args.out), progress=not args.json)
     if args.json:
@@ -90,7 +88,7 @@ def cmd_validate(args) -> int:
 
 
 def cmd_demo(args) -> int:
-    from pipelines.demo import describe, run_demo
+    from pipelines.jobs.demo import describe, run_demo
 
     result = run_demo(args.out, cache_dir=_cache(args), workers=args.workers, progress=not args.quiet)
     print(_json({"summary": result.summary, "stage_times_s": result.stage_times, "files": result.files})
@@ -99,7 +97,7 @@ def cmd_demo(args) -> int:
 
 
 def cmd_limit(args) -> int:
-    from pipelines.limit import coupled_scene, find_limit, parse_range_um, plot_limit, write_limit
+    from pipelines.jobs.limit import coupled_scene, find_limit, parse_range_um, plot_limit, write_limit
 
     low, high = parse_range_um(args.amplitude)
     if args.tolerance <= 0:
@@ -133,9 +131,9 @@ def cmd_sweep(args) -> int:
     """`fretwork sweep`: the multibody speed sweep; with --margins also the amplitude limit and the margins."""
     if not args.margins:
         return args.multibody_handler(args)
-    from mbs.sweep import parse_speeds
-    from pipelines.limit import parse_range_um
-    from pipelines.margins import margin_sweep, plot_margins
+    from pipelines.jobs.sweep import parse_speeds
+    from pipelines.jobs.limit import parse_range_um
+    from pipelines.jobs.margins import margin_sweep, plot_margins
     from pipelines import scene as scenes
 
     speeds = parse_speeds(args.speeds)
@@ -179,7 +177,7 @@ def cmd_reduce(args) -> int:
 
 
 def cmd_study(args) -> int:
-    from pipelines.studies import constant_cof_comparison
+    from pipelines.studies.constant_cof import constant_cof_comparison
 
     probes = {f"P{k + 1}": [float(v) for v in p.split(",")] for k, p in enumerate(args.probe)}
     records = constant_cof_comparison(args.scene, probes)
@@ -193,8 +191,30 @@ def cmd_study(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``fretwork`` parser: one sub-command per job."""
     parser = argparse.ArgumentParser(prog="fretwork", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
+    _add_run_parser(sub)
+    _add_validate_and_demo_parsers(sub)
+    _add_limit_parser(sub)
+    _add_reduce_parser(sub)
+    _add_study_parsers(sub)
+    from pipelines.cli.mbs import add_run_parser, add_sweep_parser
+    from pipelines.fmu.cli import add_export_fmu_parser
+    add_export_fmu_parser(sub)
+    sweep = add_sweep_parser(sub)
+    sweep.add_argument("--margins", action="store_true",
+                       help="also find the amplitude limit of the coupled scene and report limit / amplitude per speed")
+    sweep.add_argument("--amplitude", default="50:500", metavar="LOW:HIGH",
+                       help="with --margins: wing amplitude range of the limit search, µm (default %(default)s)")
+    sweep.add_argument("--tolerance", type=float, default=10.0, help="with --margins: limit tolerance, µm")
+    _add_cache_arguments(sweep)
+    sweep.set_defaults(multibody_handler=sweep.get_default("handler"), handler=cmd_sweep)
+    add_run_parser(sub)
+    return parser
+
+
+def _add_run_parser(sub) -> None:
     run = sub.add_parser("run", help="run a scene file")
     run.add_argument("scene")
     run.add_argument("--out", required=True, help="output directory")
@@ -204,6 +224,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="continue an interrupted run from DIR/checkpoint.h5")
     _add_cache_arguments(run)
     run.set_defaults(func=cmd_run)
+
+
+def _add_validate_and_demo_parsers(sub) -> None:
     validate = sub.add_parser("validate", help="validation against closed forms and reference models")
     validate.add_argument("--json", action="store_true")
     validate.add_argument("--quick", action="store_true", help="coarser settings (CI)")
@@ -219,6 +242,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--workers", type=int, default=None, help="worker processes for the limit and sweep cases")
     _add_cache_arguments(demo)
     demo.set_defaults(func=cmd_demo)
+
+
+def _add_limit_parser(sub) -> None:
     limit = sub.add_parser("limit", help="largest wing amplitude that still ends stuck (bisection)",
                            description="Run the coupled scene's COF and wear phases at wing amplitudes in the "
                                        "range and narrow the bracket around the stick limit to the tolerance.")
@@ -229,9 +255,12 @@ def build_parser() -> argparse.ArgumentParser:
     limit.add_argument("--json", action="store_true")
     limit.add_argument("--quiet", action="store_true")
     _add_cache_arguments(limit)
-    from pipelines.distributed import add_cluster_arguments
+    from pipelines.parallel import add_cluster_arguments
     add_cluster_arguments(limit)
     limit.set_defaults(func=cmd_limit)
+
+
+def _add_reduce_parser(sub) -> None:
     reduce = sub.add_parser("reduce", help="accuracy of a Craig-Bampton reduction of a mesh")
     reduce.add_argument("mesh", help="mesh file (Abaqus .inp, Gmsh .msh, ...) with named node sets")
     reduce.add_argument("--modes", type=int, required=True, help="fixed-interface modes")
@@ -243,6 +272,9 @@ def build_parser() -> argparse.ArgumentParser:
     reduce.add_argument("--out", default="results/reduce")
     reduce.add_argument("--json", action="store_true")
     reduce.set_defaults(func=cmd_reduce)
+
+
+def _add_study_parsers(sub) -> None:
     study = sub.add_parser("study", help="studies that compare several runs of a scene")
     kinds = study.add_subparsers(dest="study", required=True)
     constant = kinds.add_parser("constant-cof", help="variable vs constant COF (paper Fig. 8)")
@@ -251,21 +283,8 @@ def build_parser() -> argparse.ArgumentParser:
                           help="probe point 'x,y[,z]' in mm (repeat; paper's P1, P2)")
     constant.add_argument("--json", action="store_true")
     constant.set_defaults(func=cmd_study)
-    from pipelines.accuracy import add_accuracy_parser
+    from pipelines.cli.accuracy import add_accuracy_parser
     add_accuracy_parser(kinds)
-    from mbs.cli import add_run_parser, add_sweep_parser
-    from pipelines.fmu import add_export_fmu_parser
-    add_export_fmu_parser(sub)
-    sweep = add_sweep_parser(sub)
-    sweep.add_argument("--margins", action="store_true",
-                       help="also find the amplitude limit of the coupled scene and report limit / amplitude per speed")
-    sweep.add_argument("--amplitude", default="50:500", metavar="LOW:HIGH",
-                       help="with --margins: wing amplitude range of the limit search, µm (default %(default)s)")
-    sweep.add_argument("--tolerance", type=float, default=10.0, help="with --margins: limit tolerance, µm")
-    _add_cache_arguments(sweep)
-    sweep.set_defaults(multibody_handler=sweep.get_default("handler"), handler=cmd_sweep)
-    add_run_parser(sub)
-    return parser
 
 
 def main(argv=None) -> int:

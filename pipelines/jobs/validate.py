@@ -40,7 +40,9 @@ from contact.structure import ContactSpace  # noqa: E402
 from pipelines import scene as scenes  # noqa: E402
 from pipelines.build import build  # noqa: E402
 
-SCENE = Path(__file__).resolve().parent.parent / "examples" / "cylinder_on_plane.toml"
+from pipelines import examples  # noqa: E402
+
+SCENE = examples.scene_path("cylinder_on_plane")
 RADIUS, LINE_LOAD, YOUNG, POISSON, COF = 80.0, 1066.0, 120e3, 0.3, 0.56
 
 

@@ -19,7 +19,7 @@ from skfem.io.meshio import INV_HEX_MAPPING
 
 from reduction.elasticity import ElasticBody
 from reduction.errors import InputError
-from reduction.selection import nodes_at_points
+from reduction.mesh.selection import nodes_at_points
 
 # meshio cell type -> (scikit-fem mesh, dimension)
 _SOLID_CELLS = {

@@ -2,7 +2,7 @@
 
 For each engine speed the multibody model gives the wing amplitude (half the peak-to-peak wing
 torsion of the scene's counterweight); the margin is amplitude limit / wing amplitude, where
-the limit comes from :func:`pipelines.limit.find_limit` on the coupled scene. A margin below
+the limit comes from :func:`pipelines.jobs.limit.find_limit` on the coupled scene. A margin below
 1 means the joint does not stay stuck at that speed.
 
 Calibration: when the scene states its wing amplitude (``coupling.wing_amplitude``, e.g. a
@@ -23,7 +23,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from pipelines.limit import LimitResult, find_limit
+from pipelines.coupling import CouplingSettings
+from pipelines.jobs.limit import LimitResult, find_limit
 from reduction.errors import InputError
 
 
@@ -55,7 +56,7 @@ class MarginResult:
 
 def calibration_factor(scene, cache) -> float:
     """Stated wing amplitude / multibody wing amplitude at the scene's speed (1 if none is stated)."""
-    from pipelines.build import multibody_loading
+    from pipelines.coupling import multibody_loading
 
     stated = scene.data["coupling"].get("wing_amplitude")
     if stated is None:
@@ -69,9 +70,9 @@ def calibration_factor(scene, cache) -> float:
 def margin_sweep(scene_path, speeds, *, amplitude_range_mm, tolerance_mm, cache_dir=None, sweep_path=None,
                  out_dir=None, scheduler=None, workers=None, progress=True, overrides=None):
     """Speed sweep, amplitude limit and margins (module doc); returns (MarginResult, SweepResult)."""
-    from mbs.sweep import speed_sweep
+    from pipelines.jobs.sweep import speed_sweep
     from pipelines import scene as scenes
-    from pipelines.build import multibody_params
+    from pipelines.coupling import multibody_params
     from pipelines.stages import StageCache
 
     scene = scenes.load(scene_path, overrides or None)
@@ -93,7 +94,7 @@ def margin_sweep(scene_path, speeds, *, amplitude_range_mm, tolerance_mm, cache_
 def margins_of(scene, sweep, limit: LimitResult, cache) -> MarginResult:
     """Calibrated wing amplitude of the scene's CW per sweep speed and margin = limit / amplitude
     (the limit searched at the highest sweep speed)."""
-    counterweight = scene.data["coupling"].get("counterweight", 1) - 1
+    counterweight = CouplingSettings.of(scene).counterweight - 1
     factor = calibration_factor(scene, cache)
     amplitude = factor * sweep.wing_amplitude[:, counterweight]
     margin = (np.full_like(amplitude, np.nan) if limit.limit_mm is None

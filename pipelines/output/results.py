@@ -35,7 +35,7 @@ import numpy as np
 
 from contact.energy import EnergyMeter
 from contact.procedure import PHASES, CycleSummary, IncrementRecord, Observer
-from pipelines.checkpoint import read_snapshot, write_snapshot
+from pipelines.output.checkpoint import read_snapshot, write_snapshot
 from reduction.errors import InputError
 
 FORMAT = "fretwork-results"

@@ -12,9 +12,9 @@ from contact import procedure
 from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from pipelines.build import Model, build
-from pipelines.paraview import write_final_vtu, write_interface_series
-from pipelines.plots import plot_results
-from pipelines.results import ResultsWriter
+from pipelines.output.paraview import write_final_vtu, write_interface_series
+from pipelines.output.plots import plot_results
+from pipelines.output.results import ResultsWriter
 from pipelines.scene import Scene
 from pipelines.stages import StageCache
 from reduction.errors import InputError
@@ -123,7 +123,7 @@ def run_scene(scene: Scene, out_dir: str | Path, *, progress: bool = True, plots
     times = {}
     multibody = None
     if "coupling" in scene.data:
-        from pipelines.build import multibody_loading
+        from pipelines.coupling import multibody_loading
 
         clock = time.perf_counter()
         multibody = multibody_loading(scene, cache)

@@ -1,0 +1,129 @@
+"""The verdict of a procedure run and the figures it rests on (paper §3; SPEC §5).
+
+:func:`cycle_figures` gives the global figures of one load cycle (area fractions over the
+nominal contact area, stick margin, wear, dissipation); :func:`active_slip_area_fraction` the
+area that still slides in the sense of the verdict; :func:`loosening_evident` whether the clamp
+force keeps falling while the stick area shrinks; :func:`verdict` the engineer's answer
+(``stick``, ``damage`` or ``loosening``). :class:`Ending` is why a run stopped. Pure functions of
+arrays: no I/O. Units: area mm², pressure MPa, dissipation mJ/mm², slip mm, force N.
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+
+import numpy as np
+
+from contact.law import ContactState, Status
+
+
+class Ending(str, Enum):
+    """Why a procedure run ended.
+
+    completed: every cycle of every phase ran; shakedown: the contact became stationary (stuck)
+    and the run stopped early; loosening: the wear phase stopped because loosening was evident;
+    slid_off: an increment failed because tangential equilibrium was lost (the load exceeds what
+    friction can carry); wear_runaway: an increment failed because the wear increment did not
+    shrink with the step; diverged: an increment failed for another reason.
+    """
+
+    COMPLETED = "completed"
+    SHAKEDOWN = "shakedown"
+    LOOSENING = "loosening"
+    SLID_OFF = "slid_off"
+    WEAR_RUNAWAY = "wear_runaway"
+    DIVERGED = "diverged"
+
+
+def _fractions(area, nominal, mask):
+    return float(area[mask].sum() / nominal) if nominal > 0 else 0.0
+
+
+def cycle_figures(area: np.ndarray, nominal_area: float, status: np.ndarray,
+                  max_utilised: np.ndarray, state: ContactState, cof_initial: np.ndarray,
+                  cof_max, area_tolerance: float) -> dict:
+    """Global figures of a cycle: area fractions, margin, wear, dissipation.
+
+    Fractions refer to the nominal contact area (closed after the preload). The stick margin
+    is 1 − max utilised COF / μ_max over points that stayed stuck.
+    """
+    stuck = status == Status.STICK
+    slipped = status >= Status.SLIP
+    damaged = status == Status.SLIP_AT_MAX
+    wear = state.gap if state.wear_depth is not None else np.zeros_like(area)
+    margins = 1.0 - max_utilised[stuck] / np.broadcast_to(cof_max, area.shape)[stuck]
+    return {
+        "stick_area_fraction": _fractions(area, nominal_area, stuck),
+        "slip_area_fraction": _fractions(area, nominal_area, slipped),
+        "damaged_area_fraction": _fractions(area, nominal_area, damaged),
+        "worn_area_fraction": _fractions(area, nominal_area, np.asarray(wear) > 1e-9),
+        # evolved: risen by more than 1 % of its range (numerical micro-slips of equilibrium
+        # iterations raise μ by round-off amounts that are not fretting)
+        "cof_evolved_area_fraction": _fractions(area, nominal_area, state.cof > cof_initial + 0.01 * (
+            np.broadcast_to(cof_max, area.shape) - cof_initial)),
+        "max_wear_depth_mm": float(np.max(wear, initial=0.0)),
+        "wear_volume_mm3": float(np.sum(np.asarray(wear) * area)),
+        "dissipated_energy_mJ": float(np.sum(state.dissipation * area)),
+        "min_stick_margin": float(margins.min()) if margins.size else None,
+    }
+
+
+def active_slip_area_fraction(area: np.ndarray, nominal_area: float, pressure: np.ndarray,
+                              dissipation_in_cycle: np.ndarray, cof: np.ndarray,
+                              critical_slip, slip_tolerance: float) -> float:
+    """Fraction of the nominal area that still slides in a cycle, in the sense of the verdict.
+
+    A point slides when its pressure-weighted irreversible slip over the cycle,
+    Σ p·Δγ_sl / p̄ (Σ p·Δγ_sl = dissipation / μ, the Archard wear driver; p̄ the mean pressure
+    over the nominal area at the end of the cycle), exceeds ``slip_tolerance``·γ_crit.
+    Two kinds of point fail that test although their status says slip: points worn out of
+    contact, whose pressure Archard wear drives towards zero only asymptotically (w·Δγ·p
+    vanishes with p), and points at the stick limit whose irreversible slip is a tiny
+    fraction of the elastic slip γ_crit the law already treats as stick. Neither carries
+    friction load nor wears or evolves its COF any more. Units: area mm², pressure MPa,
+    dissipation mJ/mm², critical_slip mm.
+    """
+    mean_pressure = float(np.sum(pressure * area) / nominal_area) if nominal_area > 0 else 0.0
+    if mean_pressure <= 0.0:
+        return 0.0
+    weighted_slip = np.divide(dissipation_in_cycle, cof, out=np.zeros_like(dissipation_in_cycle),
+                              where=cof > 0.0) / mean_pressure
+    sliding = weighted_slip > slip_tolerance * np.broadcast_to(critical_slip, area.shape)
+    return _fractions(area, nominal_area, sliding)
+
+
+def verdict(history: list, procedure, stationary: bool) -> str:
+    """``loosening`` (see :func:`loosening_evident`), else ``stick`` when at most ``area_tolerance``
+    of the area still slid in the last cycle (:func:`active_slip_area_fraction`; histories
+    without it fall back to the status-based slip area), else ``damage``."""
+    last = history[-1].figures
+    if loosening_evident(history, procedure):
+        return "loosening"
+    sliding = last.get("active_slip_area_fraction", last["slip_area_fraction"])
+    if sliding <= procedure.area_tolerance:
+        return "stick"
+    return "damage"
+
+
+def loosening_evident(history: list, procedure) -> bool:
+    """Loosening is evident when, over the last ``loosening_window`` wear cycles, the clamp
+    force keeps falling without its rate decaying (second half at least 0.8 of the first),
+    by a visible amount (0.5 % of the clamp force), while the stick area shrinks or the
+    whole contact slides. The shrinking is the least-squares trend of the stick area over
+    the window, not its first and last values: points at the stick limit flicker between
+    stick and slip from cycle to cycle by a few per cent of the area, and an endpoint
+    comparison called a contact loosening whose stick area was steady or regrowing."""
+    wear_cycles = [c for c in history if c.phase == "wear" and c.clamp_force is not None]
+    if len(wear_cycles) < procedure.loosening_window:
+        return False
+    recent = wear_cycles[-procedure.loosening_window:]
+    force = np.array([c.clamp_force for c in recent])
+    stick = np.array([c.figures["stick_area_fraction"] for c in recent])
+    middle = len(force) // 2
+    first_rate = (force[0] - force[middle]) / middle
+    second_rate = (force[middle] - force[-1]) / (len(force) - 1 - middle)
+    falling = second_rate > 0.0 and second_rate >= 0.8 * first_rate
+    visible = force[0] - force[-1] > 5e-3 * abs(force[0])
+    stick_change = np.polyfit(np.arange(len(stick)), stick, 1)[0] * (len(stick) - 1)
+    stick_shrinks = stick_change < -procedure.area_tolerance or stick[-1] <= procedure.area_tolerance
+    return bool(falling and visible and stick_shrinks)

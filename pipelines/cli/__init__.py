@@ -1,0 +1,1 @@
+"""The ``fretwork`` command line."""

@@ -1,0 +1,175 @@
+"""Export load histories as co-simulation FMUs that other simulation tools play back.
+
+The FMU holds a small generic C player (``pipelines/fmu/template``) and the sampled
+histories as a binary table in ``resources/histories.bin``; the player interpolates
+linearly between samples. One compiled player serves every export, so the FMU grows
+only with the data (8 bytes per sample and signal, before zip compression).
+
+Playback parameters of every exported FMU (all ``fixed``: set before initialization):
+
+- ``time_offset`` (s): the output at simulation time t is the history at t - time_offset.
+- ``periodic`` (Boolean): repeat the history instead of holding the first/last sample.
+- ``period`` (s): repetition period, default the sampled span t_last - t_first. A longer
+  period bridges the gap after the last sample linearly back to the first sample.
+
+Units follow the results file (fretwork uses mm, N, MPa, t, s, mJ).
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import warnings
+import zipfile
+from pathlib import Path
+from typing import Sequence
+
+from reduction.errors import InputError
+from pipelines.fmu.table import TABLE_FILE, instantiation_token, model_identifier, read_playback_table, write_table
+from pipelines.fmu.description import (FMI_HEADERS, FMI_SOURCES, PLAYER_HEADERS, PLAYER_SOURCES,
+                                       build_description_xml, model_description_xml)
+
+
+TEMPLATE_DIR = Path(__file__).parent / "template"
+
+
+class SourceOnlyFmuWarning(UserWarning):
+    """The FMU was exported without a compiled binary (sources only)."""
+
+
+class FmuBuildError(RuntimeError):
+    """The C compiler failed on the player sources: a fretwork or toolchain defect, not bad input."""
+
+
+def export_fmu(
+    results_path: str | os.PathLike,
+    output_path: str | os.PathLike,
+    signals: Sequence[str] | None = None,
+    fmi_version: int = 2,
+    *,
+    model_name: str | None = None,
+    compiler: str | None = None,
+) -> Path:
+    """Write a co-simulation FMU that plays back the ``/histories`` of a results file.
+
+    results_path: HDF5 results file with a ``/histories`` group (time in s, signals (n,) or (n, k)).
+    output_path: FMU file to write; parent folders are created. Written atomically: on any error
+        no FMU file is left at output_path.
+    signals: dataset names under ``/histories`` to export, in this order; None exports all.
+        A signal of shape (n, k) becomes k outputs ``<signal>.<component>`` when the dataset has a
+        ``components`` attribute, else ``<signal>[1]`` .. ``<signal>[k]``.
+    fmi_version: 2 (FMI 2.0, default) or 3 (FMI 3.0).
+    model_name: model name and identifier (binary name); default from the output file name.
+    compiler: C compiler command; default $CC, then cc, gcc, clang. If none is found, or this
+        platform has no FMI binary folder, the FMU holds sources only and a
+        SourceOnlyFmuWarning is issued.
+
+    Raises InputError for bad input (missing file, group or signal; empty, non-finite or
+    non-increasing time; NaN or infinite data) and FmuBuildError if compilation fails.
+    Returns the path of the written FMU.
+    """
+    if fmi_version not in (2, 3):
+        raise InputError(f"FMI version {fmi_version!r} is not supported: choose 2 or 3")
+    output_path = Path(output_path)
+    if output_path.is_dir():
+        raise InputError(f"FMU output path {output_path} is a folder; give a file name such as loads.fmu")
+    table = read_playback_table(results_path, signals)
+    identifier = model_identifier(model_name or output_path.stem)
+    token = instantiation_token(table)
+
+    output_path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="fretwork-fmu-") as work:
+        fmu_dir = Path(work) / "fmu"
+        _write_sources(fmu_dir / "sources", fmi_version, identifier)
+        (fmu_dir / "resources").mkdir()
+        write_table(fmu_dir / "resources" / TABLE_FILE, table, token)
+        (fmu_dir / "modelDescription.xml").write_bytes(
+            model_description_xml(table, fmi_version, identifier, token)
+        )
+        _add_binary(fmu_dir, fmi_version, identifier, compiler)
+        _zip_atomically(fmu_dir, output_path)
+    return output_path
+
+
+def _write_sources(sources_dir: Path, fmi_version: int, identifier: str) -> None:
+    sources_dir.mkdir(parents=True)
+    for name in PLAYER_SOURCES + PLAYER_HEADERS + FMI_SOURCES[fmi_version] + FMI_HEADERS[fmi_version]:
+        shutil.copyfile(TEMPLATE_DIR / name, sources_dir / name)
+    if fmi_version == 3:
+        (sources_dir / "buildDescription.xml").write_bytes(build_description_xml(identifier))
+
+
+def binary_platform(fmi_version: int) -> tuple[str, str] | None:
+    """(binaries folder, shared library suffix) of this platform, None where the player is not built."""
+    machine = platform.machine().lower()
+    if sys.platform.startswith("linux") and machine in ("x86_64", "amd64"):
+        return ("linux64" if fmi_version == 2 else "x86_64-linux"), ".so"
+    if sys.platform.startswith("linux") and machine in ("aarch64", "arm64") and fmi_version == 3:
+        return "aarch64-linux", ".so"
+    if sys.platform == "darwin":
+        if fmi_version == 2:
+            return "darwin64", ".dylib"
+        return ("aarch64-darwin" if machine == "arm64" else "x86_64-darwin"), ".dylib"
+    return None
+
+
+def find_compiler(compiler: str | None = None) -> str | None:
+    """Path of the C compiler to use: `compiler`, else $CC, cc, gcc, clang; None if none is found."""
+    candidates = [compiler] if compiler else [os.environ.get("CC"), "cc", "gcc", "clang"]
+    for candidate in candidates:
+        if candidate and shutil.which(candidate):
+            return shutil.which(candidate)
+    return None
+
+
+def _add_binary(fmu_dir: Path, fmi_version: int, identifier: str, compiler: str | None) -> None:
+    target = binary_platform(fmi_version)
+    compiler_path = find_compiler(compiler)
+    if target is None or compiler_path is None:
+        reason = (
+            f"no FMI binary folder is known for {sys.platform}/{platform.machine()}"
+            if target is None
+            else f"no C compiler found (tried {compiler or '$CC, cc, gcc, clang'})"
+        )
+        warnings.warn(
+            SourceOnlyFmuWarning(
+                f"{reason}: the FMU holds C sources only; importing tools must compile it "
+                f"(e.g. FMPy: fmpy.build.build_platform_binary)"
+            ),
+            stacklevel=3,
+        )
+        return
+    folder, suffix = target
+    binary_dir = fmu_dir / "binaries" / folder
+    binary_dir.mkdir(parents=True)
+    sources_dir = fmu_dir / "sources"
+    command = [
+        compiler_path, "-std=c99", "-O2", "-shared", "-fPIC", "-fvisibility=hidden",
+        "-I", str(sources_dir),
+        *(str(sources_dir / name) for name in PLAYER_SOURCES + FMI_SOURCES[fmi_version]),
+        "-o", str(binary_dir / (identifier + suffix)), "-lm",
+    ]
+    completed = subprocess.run(command, capture_output=True, text=True)
+    if completed.returncode != 0:
+        raise FmuBuildError(
+            f"compiling the FMU player failed ({' '.join(command)}):\n{completed.stderr.strip()}"
+        )
+
+
+def _zip_atomically(fmu_dir: Path, output_path: Path) -> None:
+    """Zip into a temporary file beside output_path, then rename: no partial FMU is ever visible."""
+    handle, temporary = tempfile.mkstemp(prefix=f".{output_path.name}.", suffix=".part", dir=output_path.parent)
+    os.close(handle)
+    try:
+        # Level 1: float tables compress little, and higher levels cost seconds on large exports.
+        with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as archive:
+            for path in sorted(fmu_dir.rglob("*")):
+                archive.write(path, path.relative_to(fmu_dir).as_posix())
+        os.replace(temporary, output_path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise

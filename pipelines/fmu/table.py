@@ -1,0 +1,230 @@
+"""The sampled histories of a results file and the binary table the FMU's C player reads.
+
+Signals come from the ``/histories`` group (one output per component, named and united after
+the results file); the table (``resources/histories.bin``) is laid out as in template/player.c.
+Units follow the results file (fretwork uses mm, N, MPa, t, s, mJ).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+
+import h5py
+import numpy as np
+
+from reduction.errors import InputError
+
+
+#: Names of the time and the playback parameters, which no output may take.
+PARAMETER_NAMES = ("time", "time_offset", "period", "periodic")
+TABLE_FILE = "histories.bin"
+TABLE_MAGIC = b"FRETHIS1"
+TOKEN_SIZE = 64
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+# Characters FMI allows inside a quoted ('...') structured name.
+_QUOTED_NAME = re.compile(r"[A-Za-z0-9_!#$%&()*+,\-./:;<=>?@\[\]^{}|~ ]+\Z")
+
+
+@dataclass(frozen=True)
+class PlaybackTable:
+    """Histories flattened to scalar FMU outputs.
+
+    time: (n,) strictly increasing sample times, s.
+    values: (n, m) output values at the samples, in each output's unit.
+    names, units, descriptions: (m,) FMI variable name, unit ('' if none) and description.
+    """
+
+    time: np.ndarray
+    values: np.ndarray
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    descriptions: tuple[str, ...]
+
+
+def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] | None = None) -> PlaybackTable:
+    """Read and check the ``/histories`` group; flatten (n, k) signals to k scalar outputs."""
+    results_path = Path(results_path)
+    if not results_path.is_file():
+        raise InputError(f"results file {results_path} does not exist")
+    try:
+        results = h5py.File(results_path, "r")
+    except OSError as error:
+        raise InputError(f"results file {results_path} is not a readable HDF5 file ({error})") from None
+    with results:
+        if "histories" not in results or not isinstance(results["histories"], h5py.Group):
+            raise InputError(
+                f"results file {results_path} has no /histories group: write the load histories first"
+            )
+        histories = results["histories"]
+        time = _read_time(histories, results_path)
+        available = [name for name, item in histories.items() if name != "time" and isinstance(item, h5py.Dataset)]
+        selected = _select_signals(signals, available, results_path)
+        columns, names, units, descriptions = [], [], [], []
+        for signal in selected:
+            data = _read_signal(histories[signal], signal, time)
+            unit = _text_attribute(histories[signal], "units")
+            description = _text_attribute(histories[signal], "description")
+            outputs = _outputs_of(histories[signal], signal, data.shape[1])
+            columns.append(data)
+            names.extend(name for name, _ in outputs)
+            units.extend([unit] * len(outputs))
+            descriptions.extend(
+                f"{description} ({label})" if label and description else description or label
+                for _, label in outputs
+            )
+    return PlaybackTable(
+        time=time,
+        values=np.ascontiguousarray(np.hstack(columns)),
+        names=tuple(names),
+        units=tuple(units),
+        descriptions=tuple(descriptions),
+    )
+
+
+def _read_time(histories: h5py.Group, results_path: Path) -> np.ndarray:
+    if "time" not in histories or not isinstance(histories["time"], h5py.Dataset):
+        raise InputError(f"results file {results_path}: /histories/time is missing")
+    dataset = histories["time"]
+    if dataset.ndim != 1 or not np.issubdtype(dataset.dtype, np.number):
+        raise InputError(f"/histories/time must be a 1-D numeric vector, got shape {dataset.shape} of {dataset.dtype}")
+    units = _text_attribute(dataset, "units")
+    if units not in ("", "s"):
+        raise InputError(f"/histories/time is in {units!r}; the FMU plays histories in seconds (units='s')")
+    time = np.asarray(dataset[()], dtype=np.float64)
+    if time.size == 0:
+        raise InputError(f"results file {results_path}: /histories/time is empty, there is nothing to play back")
+    if time.size < 2:
+        raise InputError("/histories/time has a single sample; linear playback needs at least two")
+    if not np.all(np.isfinite(time)):
+        first = int(np.flatnonzero(~np.isfinite(time))[0])
+        raise InputError(f"/histories/time has a non-finite value ({time[first]}) at sample {first}")
+    steps = np.diff(time)
+    if np.any(steps <= 0.0):
+        k = int(np.flatnonzero(steps <= 0.0)[0])
+        raise InputError(
+            f"/histories/time must increase strictly, but sample {k + 1} ({time[k + 1]!r} s) "
+            f"does not come after sample {k} ({time[k]!r} s)"
+        )
+    return time
+
+
+def _select_signals(signals: Sequence[str] | None, available: list[str], results_path: Path) -> list[str]:
+    if isinstance(signals, str):
+        signals = [signals]
+    if signals is None:
+        if not available:
+            raise InputError(f"results file {results_path}: /histories holds no signal besides time")
+        return available
+    if len(signals) == 0:
+        raise InputError("no signals selected for the FMU: name at least one, or pass None for all")
+    unknown = [name for name in signals if name not in available]
+    if unknown:
+        raise InputError(
+            f"unknown signal(s) {', '.join(map(repr, unknown))} in /histories of {results_path}; "
+            f"available: {', '.join(available) or 'none'}"
+        )
+    duplicates = sorted({name for name in signals if list(signals).count(name) > 1})
+    if duplicates:
+        raise InputError(f"signal(s) {', '.join(map(repr, duplicates))} selected more than once")
+    return list(signals)
+
+
+def _read_signal(dataset: h5py.Dataset, signal: str, time: np.ndarray) -> np.ndarray:
+    if signal in PARAMETER_NAMES:
+        raise InputError(f"signal name {signal!r} is reserved for an FMU playback variable; rename the dataset")
+    if dataset.ndim not in (1, 2) or dataset.shape[0] != time.size:
+        raise InputError(
+            f"signal {signal!r} has shape {dataset.shape}; expected ({time.size},) or ({time.size}, k) "
+            f"to match /histories/time"
+        )
+    if not (np.issubdtype(dataset.dtype, np.integer) or np.issubdtype(dataset.dtype, np.floating)):
+        raise InputError(f"signal {signal!r} holds {dataset.dtype} data; only real numbers can be played back")
+    data = np.asarray(dataset[()], dtype=np.float64).reshape(time.size, -1)
+    if data.shape[1] == 0:
+        raise InputError(f"signal {signal!r} has no components")
+    bad = ~np.isfinite(data)
+    if bad.any():
+        sample, component = np.argwhere(bad)[0]
+        where = f"sample {sample} (t = {time[sample]!r} s)"
+        if dataset.ndim == 2:
+            where += f", component {component}"
+        raise InputError(f"signal {signal!r} has a NaN or infinite value at {where}")
+    return data
+
+
+def _outputs_of(dataset: h5py.Dataset, signal: str, n_components: int) -> list[tuple[str, str]]:
+    """(FMI name, component label for the description) of each output a signal becomes."""
+    base = _fmi_name(signal)
+    if dataset.ndim == 1:
+        return [(base, "")]
+    components = dataset.attrs.get("components")
+    if components is None:
+        return [(f"{base}[{j + 1}]", f"component {j + 1} of {n_components}") for j in range(n_components)]
+    components = [c.decode() if isinstance(c, bytes) else str(c) for c in np.atleast_1d(components)]
+    if len(components) != n_components:
+        raise InputError(
+            f"signal {signal!r} lists {len(components)} component names for {n_components} columns"
+        )
+    if len(set(components)) != len(components):
+        raise InputError(f"signal {signal!r} repeats a component name: {components}")
+    return [(f"{base}.{_fmi_name(component)}", f"component {component}") for component in components]
+
+
+def _fmi_name(name: str) -> str:
+    """Structured FMI name part: identifiers as they are, other names quoted."""
+    if _IDENTIFIER.match(name):
+        return name
+    if _QUOTED_NAME.match(name):
+        return f"'{name}'"
+    raise InputError(
+        f"name {name!r} cannot become an FMI variable name: use letters, digits, spaces and ASCII punctuation "
+        f"other than quotes and backslashes"
+    )
+
+
+def _text_attribute(dataset: h5py.Dataset, key: str) -> str:
+    value = dataset.attrs.get(key, "")
+    if isinstance(value, bytes):
+        value = value.decode()
+    return str(value)
+
+
+def model_identifier(name: str) -> str:
+    """C identifier made from a model name (it names the shared library and the model)."""
+    identifier = re.sub(r"[^A-Za-z0-9_]", "_", name)
+    if not identifier or identifier[0].isdigit():
+        identifier = "fmu_" + identifier
+    return identifier
+
+
+def instantiation_token(table: PlaybackTable) -> str:
+    """GUID derived from the data, so a modelDescription and its table file are matched."""
+    digest = hashlib.sha256()
+    digest.update(table.time.tobytes())
+    digest.update(table.values.tobytes())
+    digest.update("\0".join(table.names + table.units).encode())
+    return "{" + str(uuid.UUID(bytes=digest.digest()[:16])) + "}"
+
+
+def write_table(path: Path, table: PlaybackTable, token: str) -> None:
+    """Write the binary table the C player reads (layout in template/player.c)."""
+    token_bytes = token.encode("ascii")
+    if len(token_bytes) >= TOKEN_SIZE:
+        raise ValueError(f"instantiation token longer than {TOKEN_SIZE - 1} bytes")
+    n_samples, n_signals = table.values.shape
+    header = (
+        TABLE_MAGIC
+        + np.array([0x01020304, 0], dtype="<u4").tobytes()
+        + np.array([n_samples, n_signals], dtype="<u8").tobytes()
+        + token_bytes.ljust(TOKEN_SIZE, b"\0")
+    )
+    with open(path, "wb") as file:
+        file.write(header)
+        file.write(np.ascontiguousarray(table.time, dtype="<f8").tobytes())
+        file.write(np.ascontiguousarray(table.values, dtype="<f8").tobytes())

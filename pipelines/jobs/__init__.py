@@ -1,0 +1,1 @@
+"""Jobs: the commands that run scenes (run, limit, margins, demo, validate)."""

@@ -1,0 +1,1 @@
+"""Outputs of a contact run: results file, checkpoints, ParaView files, plots."""

@@ -1,0 +1,185 @@
+"""Plots of a results file, written as PNG files (matplotlib, no screen needed).
+
+2D interfaces are drawn as profiles along the contact; 3D interfaces as maps over the two
+in-plane coordinates with the largest extent. Cycle histories show the area fractions and,
+where a clamp force exists, the clamp force versus cycles.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import matplotlib
+import matplotlib.tri
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+FIELD_LABELS = {
+    "pressure": "contact pressure p [MPa]",
+    "shear": "shear traction |τ| [MPa]",
+    "cof": "COF μ [-]",
+    "max_utilised_cof": "max utilised COF |τ|/p [-]",
+    "slip_range": "slip range in cycle [mm]",
+    "dissipation_in_cycle": "frictional dissipation in cycle [mJ/mm²]",
+    "wear_depth": "wear depth (both bodies) [mm]",
+}
+
+
+def _field(group, name):
+    value = group[name][()]
+    if name == "shear":
+        value = np.linalg.norm(np.atleast_2d(value.T).T.reshape(value.shape[0], -1), axis=1)
+    if name == "wear_depth":
+        value = value.sum(axis=0)
+    return value
+
+
+def _plane_axes(coordinates: np.ndarray) -> tuple[int, int]:
+    spans = np.ptp(coordinates, axis=0)
+    first, second = np.argsort(spans)[::-1][:2]
+    return int(min(first, second)), int(max(first, second))
+
+
+def _path_plot(coordinates, final, names, a, b, title, out_dir) -> Path:
+    """Fields along the line through the middle of the interface (the paper's Figs. 9 and 12)."""
+    middle = 0.5 * (coordinates[:, b].min() + coordinates[:, b].max())
+    line_value = coordinates[np.argmin(np.abs(coordinates[:, b] - middle)), b]
+    on_line = np.abs(coordinates[:, b] - line_value) < 1e-6 * np.ptp(coordinates[:, a])
+    order = np.flatnonzero(on_line)[np.argsort(coordinates[on_line, a])]
+    shown = [n for n in ("pressure", "slip_range", "cof", "wear_depth") if n in names]
+    x = coordinates[order, a]
+    spacing = np.diff(x)
+    # No line across a hole: break it where the gap is far wider than the mesh spacing.
+    breaks = np.flatnonzero(spacing > 2.5 * np.median(spacing)) + 1 if spacing.size else []
+    fig, axes = plt.subplots(len(shown), 1, figsize=(7, 1.9 * len(shown)), sharex=True)
+    for ax, name in zip(np.atleast_1d(axes), shown):
+        values = _field(final, name)[order].astype(float)
+        ax.plot(np.insert(x, breaks, np.nan), np.insert(values, breaks, np.nan), "o-", ms=2.5, lw=1.2)
+        ax.set_ylabel(FIELD_LABELS[name], fontsize=7)
+        ax.grid(alpha=0.3)
+    np.atleast_1d(axes)[-1].set_xlabel(f"{'xyz'[a]} along {'xyz'[b]} = {line_value:g} mm [mm]")
+    fig.suptitle(f"{title}: fields along the path through the middle")
+    return _save(fig, out_dir / "path.png")
+
+
+def _save(fig, target: Path) -> Path:
+    fig.tight_layout()
+    fig.savefig(target, dpi=130)
+    plt.close(fig)
+    return target
+
+
+def _map(mesh, value, name, a, b, title, target) -> Path:
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    mappable = ax.tricontourf(mesh, value, levels=24, cmap="viridis")
+    fig.colorbar(mappable, ax=ax, label=FIELD_LABELS[name])
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"{'xyz'[a]} [mm]")
+    ax.set_ylabel(f"{'xyz'[b]} [mm]")
+    ax.set_title(title, fontsize=9)
+    return _save(fig, target)
+
+
+def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
+    """Draw the standard figures of one results file; returns the PNG paths."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with h5py.File(path, "r") as file:
+        coordinates = file["points/coordinates"][()]
+        names = [n for n in FIELD_LABELS if n in file["final"]]
+        title = file.attrs.get("scene_name", "")
+        if coordinates.shape[1] == 2:
+            written = [_line_fields(file, coordinates, names, title, out_dir)]
+        else:
+            written = _surface_maps(file, coordinates, names, title, out_dir)
+        if "figures" in file["cycles"]:
+            written.append(_cycles_plot(file["cycles"], title, out_dir))
+    return written
+
+
+def _line_fields(file, coordinates, names, title, out_dir) -> Path:
+    """2D scenes: every final field along the contact, pressure and shear of the first cycle too."""
+    final = file["final"]
+    order = np.argsort(coordinates[:, 0])
+    x = coordinates[order, 0]
+    fig, axes = plt.subplots(len(names), 1, figsize=(7, 1.9 * len(names)), sharex=True)
+    first = file["cycles/fields"]
+    for ax, name in zip(np.atleast_1d(axes), names):
+        ax.plot(x, _field(final, name)[order], "-", lw=1.4, label="final")
+        if name in ("pressure", "shear") and name in first:
+            initial = first[name][0]
+            initial = np.linalg.norm(initial.reshape(initial.shape[0], -1), axis=1) if name == "shear" else initial
+            ax.plot(x, initial[order], "--", lw=1.0, label="first cycle")
+            ax.legend(fontsize=7)
+        ax.set_ylabel(FIELD_LABELS[name], fontsize=7)
+        ax.grid(alpha=0.3)
+    np.atleast_1d(axes)[-1].set_xlabel("position along the contact x [mm]")
+    fig.suptitle(f"{title}: interface fields")
+    return _save(fig, out_dir / "fields.png")
+
+
+def _surface_maps(file, coordinates, names, title, out_dir) -> list[Path]:
+    """3D scenes: the path plot, a map per final field and the maps after the COF phase."""
+    final = file["final"]
+    a, b = _plane_axes(coordinates)
+    written = [_path_plot(coordinates, final, names, a, b, title, out_dir)]
+    facets = file["points/facets"][()] if "points/facets" in file else None
+    # Triangles of the interface's own facets: holes (a bolt hole) stay holes.
+    triangles = None if facets is None else (
+        facets if facets.shape[1] == 3 else np.concatenate([facets[:, [0, 1, 2]], facets[:, [0, 2, 3]]]))
+    mesh = matplotlib.tri.Triangulation(coordinates[:, a], coordinates[:, b], triangles)
+    for name in names:
+        written.append(_map(mesh, _field(final, name), name, a, b, f"{title}: {name.replace('_', ' ')}",
+                            out_dir / f"{name}_map.png"))
+    # the stabilised state before the wear phase (the paper's Figs. 8, 15 and 16a-b)
+    phase_of = dict(zip(file["cycles/cycle"][()], file["cycles/phase"][()]))
+    recorded = file["cycles/fields/cycle"][()] if "cycles/fields/cycle" in file else np.zeros(0, int)
+    cof_rows = [k for k, c in enumerate(recorded) if phase_of.get(c) == 1]
+    if cof_rows and any(p == 2 for p in phase_of.values()):
+        row, fields = cof_rows[-1], file["cycles/fields"]
+        for name in ("cof", "slip_range", "max_utilised_cof", "dissipation_in_cycle"):
+            written.append(_map(mesh, fields[name][row], name, a, b,
+                                f"{title}: {name.replace('_', ' ')} after the COF phase (cycle {recorded[row]})",
+                                out_dir / f"{name}_map_end_of_cof_phase.png"))
+    return written
+
+
+def _cycles_plot(cycles, title, out_dir) -> Path:
+    """Area fractions (and the clamp force) over the simulated cycles, the wear phase marked."""
+    figures = cycles["figures"]
+    # Simulated cycles on the axis: with cycle jumping the COF phase would otherwise be
+    # squeezed against zero by the wear phase's equivalent cycles.
+    n = cycles["cycle"][()]
+    phase = cycles["phase"][()]
+    equivalent = cycles["equivalent_cycles"][()]
+    clamp = figures.get("clamp_force_N")
+    has_clamp = clamp is not None and np.any(np.isfinite(clamp[()]))
+    fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(7, 5 if has_clamp else 3), sharex=True)
+    axes = np.atleast_1d(axes)
+    for key in ("stick_area_fraction", "slip_area_fraction", "damaged_area_fraction",
+                "worn_area_fraction", "cof_evolved_area_fraction"):
+        if key in figures:
+            axes[0].plot(n, figures[key][()], label=key.replace("_area_fraction", ""))
+    axes[0].set_ylabel("area / nominal area")
+    axes[0].legend(fontsize=7)
+    axes[0].grid(alpha=0.3)
+    if has_clamp:
+        axes[1].plot(n, clamp[()] / 1000.0, color="k")
+        axes[1].set_ylabel("clamp (bolt) force [kN]")
+        axes[1].grid(alpha=0.3)
+    wear = np.flatnonzero(phase == 2)
+    label = "simulated load cycle"
+    if wear.size:
+        start = n[wear[0]] - 0.5
+        for ax in axes:
+            ax.axvline(start, color="grey", ls="--", lw=0.8)
+        axes[0].text(start, 1.0, " wear phase", transform=axes[0].get_xaxis_transform(),
+                     va="top", fontsize=7, color="grey")
+        jump = (equivalent[wear[-1]] - (equivalent[wear[0] - 1] if wear[0] else 0.0)) / wear.size
+        label += f" (wear phase: each stands for {jump:g} real cycles; {equivalent[-1]:g} in all)"
+    axes[-1].set_xlabel(label)
+    fig.suptitle(f"{title}: contact condition over cycles")
+    return _save(fig, out_dir / "cycles.png")

@@ -1,0 +1,109 @@
+"""Scene files: TOML in, a validated :class:`Scene` out.
+
+A scene names its bodies (mesh, material, supports, reference points), the contact
+interface and its law, the load and motion patterns with their time histories, the
+procedure, and the *effects* it wants (``cof_evolution``, ``wear``). Validation reports every
+problem at once, each naming its key, and nothing is built before the scene is valid.
+Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
+
+Modules: :mod:`pipelines.scene.schema` (the keys, their types and meaning, :func:`validate`);
+this package reads scene files (``scene.base`` chains, overrides) into a :class:`Scene`. Typed
+views of its tables live with their users (``pipelines.coupling.CouplingSettings``,
+``contact.procedure.Procedure``), each with its defaults in one place.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from pipelines.scene.schema import validate
+from reduction.errors import InputError
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene: the parsed TOML tables and where it came from."""
+
+    data: dict
+    path: Path | None
+
+    @property
+    def name(self) -> str:
+        return self.data["scene"]["name"]
+
+    @property
+    def effects(self) -> frozenset:
+        return frozenset(self.data["scene"]["effects"])
+
+    @property
+    def dimension(self) -> int:
+        return self.data["scene"]["dimension"]
+
+    def section(self, name: str) -> dict:
+        return self.data.get(name, {})
+
+
+def parse(text: str, source: str = "scene", path: Path | None = None) -> Scene:
+    """Parse and validate TOML text; raises :class:`InputError` listing every problem."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise InputError(f"{source}: not valid TOML: {error}") from None
+    problems = validate(data, source)
+    if problems:
+        raise InputError(f"{source}: " + ("\n  - ".join([f"{len(problems)} problem(s):"] + problems)
+                                          if len(problems) > 1 else problems[0]))
+    return Scene(data, path)
+
+
+def _merged(base: dict, own: dict) -> dict:
+    """``own`` on top of ``base``: tables merge key by key, anything else is replaced."""
+    out = dict(base)
+    for key, value in own.items():
+        out[key] = _merged(base[key], value) if isinstance(value, dict) and isinstance(base.get(key), dict) else value
+    return out
+
+
+def _read(path: Path, seen: tuple = ()) -> dict:
+    """The TOML of a scene file with its ``scene.base`` chain resolved (relative to the file)."""
+    if not path.is_file():
+        raise InputError(f"scene file {path} does not exist")
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as error:
+        raise InputError(f"{path}: not valid TOML: {error}") from None
+    base = data.get("scene", {}).get("base") if isinstance(data.get("scene"), dict) else None
+    if base is None:
+        return data
+    base_path = (path.parent / base).resolve()
+    if base_path in seen:
+        raise InputError(f"{path}: 'scene.base' chain loops back to {base_path}")
+    merged = _merged(_read(base_path, seen + (base_path,)), data)
+    del merged["scene"]["base"]
+    return merged
+
+
+def load(path: str | Path, overrides: dict | None = None) -> Scene:
+    """Read a scene file (and the file its ``scene.base`` extends); ``overrides``
+    {"procedure.wear_cycles": 5, ...} replace values before validation."""
+    path = Path(path)
+    data = _read(path)
+    if overrides:
+        apply_overrides(data, overrides)
+    problems = validate(data, str(path))
+    if problems:
+        raise InputError(f"{path}: " + ("\n  - ".join([f"{len(problems)} problem(s):"] + problems)
+                                        if len(problems) > 1 else problems[0]))
+    return Scene(data, path)
+
+
+def apply_overrides(data: dict, overrides: dict) -> None:
+    """Set dotted keys in place, e.g. {"bodies.plane.mesh.contact_size": 0.1}."""
+    for dotted, value in overrides.items():
+        node = data
+        *parents, leaf = dotted.split(".")
+        for key in parents:
+            node = node.setdefault(key, {})
+        node[leaf] = value

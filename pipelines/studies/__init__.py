@@ -1,0 +1,1 @@
+"""Studies that compare several runs of a scene (accuracy versus cost, constant versus variable COF)."""

@@ -1,0 +1,150 @@
+"""Selecting nodes and boundary facets by geometry: plane, box, ring, cylinder, given points, or
+a named node set of a mesh file. Coordinates in mm.
+
+The geometric tests (:func:`in_box`, :func:`near_plane`, :func:`on_ring`) are written once. The
+``nodes_*`` functions take node coordinates (n_nodes, dim) and return sorted node indices; a
+scene's selection table (``box``, ``boxes``, ``ring``, ``axis``/``value``, ``set``) goes through
+:func:`select_points`, :func:`select_nodes` and :func:`select_facets`. An empty selection is an
+InputError that says where nothing was found.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from reduction.errors import InputError
+
+
+def _default_tolerance(coordinates: np.ndarray) -> float:
+    extent = np.ptp(coordinates, axis=0).max() if len(coordinates) else 1.0
+    return 1e-6 * max(extent, 1e-12)
+
+
+def _nonempty(selected: np.ndarray, where: str) -> np.ndarray:
+    if selected.size == 0:
+        raise InputError(f"no mesh node found {where}")
+    return selected
+
+
+AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def in_box(coordinates: np.ndarray, lower, upper, tolerance: float = 0.0) -> np.ndarray:
+    """Mask of the points inside the axis-aligned box [lower, upper] (mm), enlarged by ``tolerance``."""
+    low, high = np.asarray(lower, dtype=float) - tolerance, np.asarray(upper, dtype=float) + tolerance
+    return np.all((coordinates >= low) & (coordinates <= high), axis=1)
+
+
+def near_plane(coordinates: np.ndarray, point, unit_normal, tolerance: float) -> np.ndarray:
+    """Mask of the points within ``tolerance`` (mm) of the plane through ``point`` with unit normal."""
+    return np.abs((coordinates - np.asarray(point, dtype=float)) @ np.asarray(unit_normal, dtype=float)) <= tolerance
+
+
+def on_ring(coordinates: np.ndarray, center, axis: int, inner_radius: float, outer_radius: float,
+            tolerance: float) -> np.ndarray:
+    """Mask of the points in the plane through ``center`` normal to coordinate ``axis`` (within
+    ``tolerance``) whose distance from ``center`` lies in [inner_radius, outer_radius] (mm)."""
+    offset = coordinates - np.asarray(center, dtype=float)
+    radial = np.linalg.norm(np.delete(offset, axis, axis=1), axis=1)
+    in_plane = np.abs(offset[:, axis]) <= tolerance
+    return in_plane & (radial >= inner_radius - 1e-9) & (radial <= outer_radius + 1e-9)
+
+
+def nodes_on_plane(coordinates, point, normal, tolerance: float | None = None) -> np.ndarray:
+    """Nodes within ``tolerance`` (mm, default 1e-6 of the model size) of the plane through point, normal."""
+    x = np.asarray(coordinates, dtype=float)
+    n = np.asarray(normal, dtype=float)
+    if np.linalg.norm(n) == 0:
+        raise InputError("plane normal must not be zero")
+    tol = _default_tolerance(x) if tolerance is None else tolerance
+    return _nonempty(np.flatnonzero(near_plane(x, point, n / np.linalg.norm(n), tol)), f"within {tol:g} mm of the plane through {list(point)} "
+                     f"with normal {list(normal)}")
+
+
+def nodes_in_box(coordinates, lower, upper, tolerance: float | None = None) -> np.ndarray:
+    """Nodes inside the axis-aligned box [lower, upper] (mm), enlarged by ``tolerance``."""
+    x = np.asarray(coordinates, dtype=float)
+    tol = _default_tolerance(x) if tolerance is None else tolerance
+    return _nonempty(np.flatnonzero(in_box(x, lower, upper, tol)), f"in the box {list(lower)} .. {list(upper)}")
+
+
+def nodes_on_cylinder(coordinates, axis_point, axis_direction, radius: float, tolerance: float | None = None,
+                      *, axial_range=None) -> np.ndarray:
+    """Nodes on the cylinder surface of ``radius`` (mm) about the axis (3D), within ``tolerance``.
+
+    axial_range: (start, end) in mm along the axis from axis_point, or None for unbounded.
+    """
+    x = np.asarray(coordinates, dtype=float)
+    if x.shape[1] != 3:
+        raise InputError("cylinder selection needs 3D coordinates")
+    axis = np.asarray(axis_direction, dtype=float)
+    if np.linalg.norm(axis) == 0:
+        raise InputError("cylinder axis direction must not be zero")
+    axis = axis / np.linalg.norm(axis)
+    tol = _default_tolerance(x) if tolerance is None else tolerance
+    relative = x - np.asarray(axis_point, dtype=float)
+    along = relative @ axis
+    radial = np.linalg.norm(relative - np.outer(along, axis), axis=1)
+    selected = np.abs(radial - radius) <= tol
+    if axial_range is not None:
+        selected &= (along >= axial_range[0] - tol) & (along <= axial_range[1] + tol)
+    return _nonempty(np.flatnonzero(selected), f"within {tol:g} mm of the cylinder of radius {radius} mm about "
+                     f"{list(axis_point)} + s {list(axis_direction)}")
+
+
+def nodes_at_points(coordinates, points, tolerance: float | None = None) -> np.ndarray:
+    """For each point (mm), the index of the node at that point; InputError if a point has no node."""
+    x = np.asarray(coordinates, dtype=float)
+    p = np.atleast_2d(np.asarray(points, dtype=float))
+    tol = _default_tolerance(x) if tolerance is None else tolerance
+    distance, index = cKDTree(x).query(p)
+    missing = np.flatnonzero(distance > tol)
+    if missing.size:
+        raise InputError(f"{missing.size} of {len(p)} points have no mesh node within {tol:g} mm, "
+                         f"first {p[missing[0]].tolist()}")
+    return index
+
+
+def select_points(coordinates: np.ndarray, selection: dict, where: str, sets=None) -> np.ndarray:
+    """Boolean mask of points (n, dim) for a scene's selection table: a named node set of the mesh
+    file (``sets``, a :class:`reduction.mesh.io.MeshModel`), a box, a union of boxes, a ring or
+    a plane (mm, tolerance 1e-6·size). ``where`` names the table in error messages."""
+    if "set" in selection:
+        if sets is None:
+            raise InputError(f"'{where}.set' names a node set, but the body's mesh is generated, "
+                             "not read from a file with named sets")
+        mask = np.zeros(len(coordinates), dtype=bool)
+        mask[sets.node_set(selection["set"])] = True
+        return mask
+    if "box" in selection or "boxes" in selection:
+        mask = np.zeros(len(coordinates), dtype=bool)
+        for low, high in ([selection["box"]] if "box" in selection else selection["boxes"]):
+            mask |= in_box(coordinates, low, high)
+        return mask
+    span = float(np.ptp(coordinates)) or 1.0
+    if "ring" in selection:
+        ring = selection["ring"]
+        return on_ring(coordinates, ring["center"], AXES[ring["axis"]], ring["inner_radius"], ring["outer_radius"],
+                       ring.get("tolerance", 1e-6 * span))
+    axis = AXES[selection["axis"]]
+    tolerance = selection.get("tolerance", 1e-6 * span)
+    return np.abs(coordinates[:, axis] - selection["value"]) <= tolerance
+
+
+def select_nodes(mesh, selection: dict, where: str, sets=None) -> np.ndarray:
+    """Indices of the nodes of a scikit-fem ``mesh`` in a scene's selection (:func:`select_points`)."""
+    nodes = np.flatnonzero(select_points(mesh.p.T, selection, where, sets))
+    if nodes.size == 0:
+        raise InputError(f"'{where}' selects no nodes of the mesh; check its coordinates")
+    return nodes
+
+
+def select_facets(mesh, selection: dict, where: str, sets=None) -> np.ndarray:
+    """Boundary facets of ``mesh`` whose nodes all lie in a scene's selection."""
+    boundary = mesh.boundary_facets()
+    inside = select_points(mesh.p.T, selection, where, sets)
+    facets = boundary[np.all(inside[mesh.facets[:, boundary]], axis=0)]
+    if facets.size == 0:
+        raise InputError(f"'{where}' selects no boundary facets of the mesh; check the box or plane")
+    return facets
