@@ -24,6 +24,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from contact.cycle_jump import AdaptiveJump, next_jump, wear_rate
 from contact.law import ContactState, Status, utilised_cof
 from contact.solver import ContactSolver, ConvergenceError, Effects, Equilibrium
 from contact.verdict import Ending, active_slip_area_fraction, cycle_figures, loosening_evident, verdict
@@ -67,13 +68,20 @@ class Procedure:
     area_tolerance: fraction of the nominal area that may still slide in a stuck contact.
     slip_tolerance: a point slides in a cycle when its pressure-weighted irreversible slip
     exceeds this fraction of γ_crit (see :func:`active_slip_area_fraction`).
+    cycle_jump: real cycles each simulated wear cycle stands for, or "auto": chosen block by
+    block (:mod:`contact.cycle_jump`) so that no point's pressure changes by more than
+    ``jump_tolerance`` of the mean contact pressure in one block, at most ``max_cycle_jump``.
+    life_cycles: the wear phase ends once it stands for this many real cycles.
     """
 
     preload_increments: int = 10
     increments_per_cycle: int = 40
     cof_cycles: int = 0
     wear_cycles: int = 0
-    cycle_jump: float = 1.0
+    cycle_jump: float | str = 1.0
+    jump_tolerance: float = 0.05
+    max_cycle_jump: float = float("inf")
+    life_cycles: float = float("inf")
     cof_during_wear: bool = True
     stationary_window: int = 10
     loosening_window: int = 20
@@ -184,6 +192,7 @@ class Snapshot:
     state: ContactState
     equilibrium: Equilibrium
     history: list
+    jump: float = 1.0
 
 
 class _Run:
@@ -199,6 +208,10 @@ class _Run:
         self.cycle_number, self.first_phase, self.done_in_phase, self.quiet_cycles = 0, 0, 0, 0
         self.equivalent, self.nominal_area, self.initial_clamp, self.cof_initial = 0.0, 0.0, None, None
         self.stationary = False
+        self.adaptive = procedure.cycle_jump == "auto"
+        self.jump_settings = AdaptiveJump(tolerance=procedure.jump_tolerance, maximum=procedure.max_cycle_jump)
+        self.jump = self.jump_settings.initial if self.adaptive else float(procedure.cycle_jump)
+        self._local_stiffness = None
 
     def bolt_forces(self):
         return None if self.bolts is None else self.bolts.forces(self.solver.space, self.equilibrium)
@@ -254,7 +267,7 @@ class _Run:
         self.history = list(snapshot.history)
         self.cycle_number, self.first_phase = snapshot.cycle_number, snapshot.phase_index
         self.done_in_phase, self.quiet_cycles = snapshot.cycles_in_phase, snapshot.quiet_cycles
-        self.equivalent = snapshot.equivalent
+        self.equivalent, self.jump = snapshot.equivalent, snapshot.jump
         if self.bolts is not None:
             self.lock(snapshot.locked_elongation)
 
@@ -303,7 +316,14 @@ class _Run:
         self.observer.phase(phase, n_cycles)
         keep = max(self.procedure.loosening_window, 1)
         for count in range(self.done_in_phase if resuming else 0, n_cycles):
+            if phase == "wear":
+                if self.equivalent >= self.procedure.life_cycles:
+                    return False
+                effects = replace(effects, cycle_jump=min(self.jump, self.procedure.life_cycles - self.equivalent))
+                worn_before = np.array(self.state.gap, copy=True)
             summary = self.cycle(phase, effects)
+            if phase == "wear" and self.adaptive:
+                self.jump = self.next_jump(self.state.gap - worn_before, summary, effects.cycle_jump)
             self.history.append(summary)
             del self.history[:-keep]
             self.observer.cycle(summary)
@@ -322,11 +342,26 @@ class _Run:
                 return True
         return False
 
+    def next_jump(self, worn: np.ndarray, summary: CycleSummary, jump: float) -> float:
+        """The jump of the next block from the wear ``worn`` (mm) this one of ``jump`` added."""
+        area = self.solver.area
+        mean_pressure = float(np.sum(summary.pressure * area) / self.nominal_area) if self.nominal_area else 0.0
+        return next_jump(wear_rate(worn, jump), mean_pressure, self.local_stiffness(), jump, self.jump_settings)
+
+    def local_stiffness(self) -> np.ndarray:
+        """Pressure per mm of gap of each point alone (N/mm³): the penalty kn in series with the
+        bodies' own compliance there, 1/(1/kn + W_ii·A_i) (W's normal diagonal, mm/N)."""
+        if self._local_stiffness is None:
+            space, dim = self.solver.space, self.solver.dim
+            compliance = np.diagonal(space.W)[0::dim] * self.solver.area
+            self._local_stiffness = 1.0 / (1.0 / np.asarray(self.solver.law.normal_stiffness) + compliance)
+        return self._local_stiffness
+
     def snapshot(self, phase_index, cycles_in_phase) -> Snapshot:
         return Snapshot(self.cycle_number, phase_index, cycles_in_phase, self.quiet_cycles, self.equivalent,
                         self.nominal_area, self.initial_clamp,
                         None if self.bolts is None else self.bolts.locked_elongation,
-                        self.cof_initial, self.state, self.equilibrium, list(self.history))
+                        self.cof_initial, self.state, self.equilibrium, list(self.history), self.jump)
 
     def result(self, stopped_early: bool) -> RunResult:
         if not self.history:
@@ -368,7 +403,7 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
         phases = [("cof", procedure.cof_cycles, Effects(cof_evolution=cof_evolution)),
                   ("wear", procedure.wear_cycles if wear else 0,
                    Effects(cof_evolution=cof_evolution and procedure.cof_during_wear, wear=wear,
-                           cycle_jump=procedure.cycle_jump))]
+                           cycle_jump=current.jump))]
         stopped_early = False
         for phase_index, (phase, n_cycles, effects) in enumerate(phases):
             if phase_index < current.first_phase or n_cycles <= 0:

@@ -107,7 +107,8 @@ def verdict(history: list, procedure, stationary: bool) -> str:
 
 def loosening_evident(history: list, procedure) -> bool:
     """Loosening is evident when, over the last ``loosening_window`` wear cycles, the clamp
-    force keeps falling without its rate decaying (second half at least 0.8 of the first),
+    force keeps falling without its rate per real cycle decaying (second half at least 0.8 of
+    the first; blocks of an adaptive cycle jump stand for different numbers of cycles),
     by a visible amount (0.5 % of the clamp force), while the stick area shrinks or the
     whole contact slides. The shrinking is the least-squares trend of the stick area over
     the window, not its first and last values: points at the stick limit flicker between
@@ -119,9 +120,10 @@ def loosening_evident(history: list, procedure) -> bool:
     recent = wear_cycles[-procedure.loosening_window:]
     force = np.array([c.clamp_force for c in recent])
     stick = np.array([c.figures["stick_area_fraction"] for c in recent])
+    real = np.array([c.equivalent_cycles for c in recent])  # blocks of an adaptive jump differ in length
     middle = len(force) // 2
-    first_rate = (force[0] - force[middle]) / middle
-    second_rate = (force[middle] - force[-1]) / (len(force) - 1 - middle)
+    first_rate = (force[0] - force[middle]) / (real[middle] - real[0])
+    second_rate = (force[middle] - force[-1]) / (real[-1] - real[middle])
     falling = second_rate > 0.0 and second_rate >= 0.8 * first_rate
     visible = force[0] - force[-1] > 5e-3 * abs(force[0])
     stick_change = np.polyfit(np.arange(len(stick)), stick, 1)[0] * (len(stick) - 1)

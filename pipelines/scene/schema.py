@@ -52,6 +52,12 @@ def _integer_at_least(n):
     return lambda value: None if value >= n else f"must be >= {n}"
 
 
+def _cycle_jump(value):
+    if isinstance(value, str):
+        return None if value == "auto" else "must be a number >= 1 or \"auto\""
+    return None if value >= 1 else "must be >= 1"
+
+
 NUMBER = (int, float)
 # key → (types, required, check, meaning with units). "*" marks a table of named entries.
 SCHEMA = {
@@ -108,7 +114,13 @@ SCHEMA = {
         "increments_per_cycle": (int, False, _integer_at_least(2), "increments per load cycle"),
         "cof_cycles": (int, False, _integer_at_least(0), "COF stabilisation cycles"),
         "wear_cycles": (int, False, _integer_at_least(0), "simulated wear cycles"),
-        "cycle_jump": (NUMBER, False, lambda v: None if v >= 1 else "must be >= 1", "J"),
+        "cycle_jump": (NUMBER + (str,), False, _cycle_jump,
+                       "J, real cycles per simulated wear cycle, or \"auto\" (adaptive)"),
+        "jump_tolerance": (NUMBER, False, lambda v: None if 0 < v <= 0.5 else "must lie in (0, 0.5]",
+                           "adaptive jump: largest pressure change per block / mean pressure"),
+        "max_cycle_jump": (NUMBER, False, lambda v: None if v >= 1 else "must be >= 1",
+                           "adaptive jump: the largest J"),
+        "life_cycles": (NUMBER, False, _positive, "real cycles the wear phase stands for at most"),
         "cof_during_wear": (bool, False, None, "keep COF evolving in the wear phase"),
         "wear_cap": (NUMBER, False, _positive, "largest wear increment per step, mm"),
         "stationary_window": (int, False, _integer_at_least(1), "cycles without slip for shakedown"),

@@ -20,14 +20,14 @@ ROOT = Path(__file__).resolve().parents[2]
 SCENES = os.environ.get("FRETWORK_BENCH_DETERMINISM_SCENES",
                         "cylinder_on_plane,counterweight").split(",")
 UNPINNED = ("import sys, pipelines.threads as t; t.pin_blas_threads = lambda: None; "
-            "from pipelines.cli import main; sys.exit(main(sys.argv[1:]))")
+            "from pipelines.cli.main import main; sys.exit(main(sys.argv[1:]))")
 
 
 def _run(scene: str, out: Path, pinned: bool) -> dict:
     env = {**os.environ, "MPLBACKEND": "Agg", "OMP_NUM_THREADS": "2", "OPENBLAS_NUM_THREADS": "2",
            "MKL_NUM_THREADS": "2"}
     args = ["run", str(ROOT / "examples" / f"{scene}.toml"), "--out", str(out), "--quiet", "--no-cache"]
-    command = [sys.executable, "-m", "pipelines.cli", *args] if pinned else [sys.executable, "-c", UNPINNED, *args]
+    command = [sys.executable, "-m", "pipelines.cli.main", *args] if pinned else [sys.executable, "-c", UNPINNED, *args]
     started, cpu = time.perf_counter(), os.times()
     done = subprocess.run(command, env=env, cwd=ROOT, capture_output=True, text=True)
     after = os.times()

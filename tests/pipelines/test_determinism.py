@@ -20,7 +20,7 @@ def _run(scene, out, threads: int, solver: str = "auto") -> None:
     env = {**os.environ, "MPLBACKEND": "Agg", "OMP_NUM_THREADS": str(threads),
            "OPENBLAS_NUM_THREADS": str(threads), "MKL_NUM_THREADS": str(threads),
            SOLVER_VARIABLE: solver}
-    done = subprocess.run([sys.executable, "-m", "pipelines.cli", "run", str(scene), "--out", str(out),
+    done = subprocess.run([sys.executable, "-m", "pipelines.cli.main", "run", str(scene), "--out", str(out),
                            "--quiet", "--no-cache"], env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
 
