@@ -277,7 +277,8 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
                        float(spec["stiffness"]), float(spec["pretension"]))
                   for name, spec in data.get("bolts", {}).items()) if "bolts" in scene.effects else ()
     assembly = assemble(bodies, slave, master, loads=patterns("loads"), motions=patterns("motions"),
-                        search_distance=contact.get("search_distance", np.inf), bolts=bolts)
+                        search_distance=contact.get("search_distance", np.inf), bolts=bolts,
+                        pairing=contact.get("pairing", "auto"))
     shapes = {e["name"]: e["history"] for kind in ("loads", "motions", "body_loads") for e in data.get(kind, [])}
     shapes.update({f"bolt.{bolt.name}": "ramp" for bolt in bolts})
     shapes.update({name: "history" for name in coupled_patterns})

@@ -96,6 +96,9 @@ SCHEMA = {
         "wear_form": (str, False, lambda v: None if v in ("pressure", "shear") else
                       "must be 'pressure' or 'shear'", "Archard driver"),
         "search_distance": (NUMBER, False, _positive, "largest slave-master distance, mm"),
+        "pairing": (str, False, lambda v: None if v in ("auto", "node_to_segment", "mortar") else
+                    "must be 'auto', 'node_to_segment' or 'mortar'",
+                    "surface pairing; auto: node-to-segment on matching meshes, else mortar"),
     },
     "coupling": {
         "body": (str, True, None, "the contact body that is the counterweight"),
