@@ -263,13 +263,23 @@ def mortar_matrices(slave, master, segments: MortarSegments | None = None):
         cols = np.broadcast_to(other_nodes[:, None, :], values.shape)
         return sp.csr_matrix((values.ravel(), (rows.ravel(), cols.ravel())), shape=(n_s, n_cols))
 
-    D = integral(seg.slave_shape, s_nodes, n_s)
-    M = integral(seg.master_shape, m_nodes, n_m)
+    D = _drop_round_off(integral(seg.slave_shape, s_nodes, n_s))
+    M = _drop_round_off(integral(seg.master_shape, m_nodes, n_m))
     normal_weight = seg.slave_shape * seg.weight[:, None]
     normal = np.zeros((n_s, slave.dim))
     np.add.at(normal, s_nodes.ravel(),
               (normal_weight[:, :, None] * master.facet_normals[seg.master_facet][:, None, :]).reshape(-1, slave.dim))
     return D, M, normal
+
+
+def _drop_round_off(matrix: sp.csr_matrix) -> sp.csr_matrix:
+    """Remove entries below 1e-12 of their row's largest (the zero off-diagonals of the
+    biorthogonal D come out of the quadrature as round-off)."""
+    matrix.sum_duplicates()
+    row_max = abs(matrix).max(axis=1).toarray().ravel()
+    matrix.data[np.abs(matrix.data) < 1e-12 * np.repeat(row_max, np.diff(matrix.indptr))] = 0.0
+    matrix.eliminate_zeros()
+    return matrix
 
 
 def _projected_measure(slave) -> np.ndarray:

@@ -99,6 +99,10 @@ SCHEMA = {
         "pairing": (str, False, lambda v: None if v in ("auto", "node_to_segment", "mortar") else
                     "must be 'auto', 'node_to_segment' or 'mortar'",
                     "surface pairing; auto: node-to-segment on matching meshes, else mortar"),
+        "sliding": (str, False, lambda v: None if v in ("auto", "small", "finite") else
+                    "must be 'auto', 'small' or 'finite'",
+                    "pairing fixed (small) or following the bodies (finite); auto: finite once "
+                    "the slip reaches an element"),
     },
     "coupling": {
         "body": (str, True, None, "the contact body that is the counterweight"),
