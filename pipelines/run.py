@@ -120,8 +120,8 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     stage_times["outputs_s"] = time.perf_counter() - clock
     summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
                **result.figures}
-    if isinstance(solver, SlidingSolver):
-        summary.update(solver.summary())
+    summary.update(solver.summary() if isinstance(solver, SlidingSolver) else
+                   {"sliding": "small", "sliding_mode": "small", "pairing": model.assembly.pairing.method})
     if model.coupling is not None:
         summary.update(model.coupling.summary())
     if writer.snapshot is not None:

@@ -16,6 +16,7 @@ import pytest
 from contact import procedure
 from contact.energy import EnergyMeter
 from contact.sliding import SlidingSolver, SlidingState, worn_volumes
+from contact.solver import Effects
 from pipelines import scene as scenes
 from pipelines.build import build
 from pipelines.checkpoint import _read_state, _write_state
@@ -138,3 +139,40 @@ def test_checkpoint_keeps_the_master_wear_and_the_pairing(finite, tmp_path):
     assert isinstance(back, SlidingState)
     assert np.array_equal(back.master_wear, state.master_wear)
     assert np.array_equal(back.paired_at, state.paired_at)
+
+
+def test_3d_block_slid_off_its_partner_is_carried_by_the_overlap():
+    """A 7×7 face slid by about 1.5 mm over a 10×10 face (10 × 10 mm each): with finite
+    sliding the part that has left the lower face opens and the overlap carries the load;
+    with the pairing fixed every point would still be pressed."""
+    overrides = {
+        "scene.dimension": 3, "scene.effects": [], "materials.ti64.poisson_ratio": 0.0,
+        "bodies.cylinder.mesh": {"generator": "flat_block", "size_x": 10.0, "size_y": 10.0, "height": 4.0,
+                                 "n_x": 7, "n_y": 7, "n_z": 3, "z0": 0.0},
+        "bodies.plane.mesh": {"generator": "flat_block", "size_x": 10.0, "size_y": 10.0, "height": 4.0,
+                              "n_x": 10, "n_y": 10, "n_z": 3, "z0": -4.0},
+        "bodies.cylinder.reference_points.rp": {"nodes": {"axis": "z", "value": 4.0}, "position": [0.0, 0.0, 4.0]},
+        "bodies.plane.fixed": {"nodes": {"axis": "z", "value": -4.0}, "components": ["ux", "uy", "uz"]},
+        "contact.slave": {"body": "cylinder", "axis": "z", "value": 0.0},
+        "contact.master": {"body": "plane", "axis": "z", "value": 0.0},
+        "loads": [{"name": "press", "dof": "cylinder.rp.uz", "value": -1000.0, "history": "ramp"}],
+        "motions": [{"name": "slide", "dof": "cylinder.rp.ux", "value": 1.5, "history": "cyclic"},
+                    {"name": "hold_y", "dof": "cylinder.rp.uy", "value": 0.0, "history": "constant"}],
+    }
+    from pipelines.validate import SCENE as CYLINDER
+
+    model = build(scenes.load(CYLINDER, overrides))
+    solver = SlidingSolver(model.assembly, model.law, model.settings, mode="finite")
+    equilibrium, state = solver.initial_equilibrium(), model.initial_state()
+    for k in range(1, 4):
+        equilibrium, state, _, _ = solver.increment(equilibrium, state, model.program.preload(k / 3), Effects())
+    for k in range(1, 6):  # a quarter cycle: out to the full 1.5 mm
+        equilibrium, state, _, _ = solver.increment(equilibrium, state, model.program.cycle(k / 20), Effects())
+    normal = equilibrium.forces.reshape(-1, 3)[:, 0]
+    x = model.assembly.pairing.slave.coordinates[:, 0]
+    overlap_edge = 5.0 - 1.5
+    row = 10.0 / 7  # mm, one slave element
+    assert normal.sum() == pytest.approx(1000.0, rel=1e-9)
+    assert solver.repairs > 0
+    assert x[normal > 0].max() == pytest.approx(overlap_edge, abs=row)
+    assert solver.area[normal > 0].sum() == pytest.approx(10.0 * (10.0 - 1.5), abs=10.0 * row)
