@@ -139,7 +139,8 @@ def _condense_body(body: Body, surface: Surface | None, offset: int) -> Condense
 def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, np.ndarray], *,
              loads: dict | None = None, motions: dict | None = None,
              search_distance: float = np.inf,
-             initial_gap: np.ndarray | None = None, bolts: tuple = ()) -> Assembly:
+             initial_gap: np.ndarray | None = None, bolts: tuple = (),
+             pairing: str = "auto") -> Assembly:
     """Condense the bodies and pair ``slave`` = (body name, facet indices) with ``master``.
 
     loads / motions: pattern name → list of (body, reference point, component, value);
@@ -148,6 +149,7 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     given, replaces the geometric gap (e.g. an analytic profile on flat meshes).
     bolts: :class:`contact.bolts.Bolt` items; each adds a pretension load pattern
     "bolt.<name>" that ramps in the preload and is locked afterwards.
+    pairing: "auto", "node_to_segment" or "mortar" (see :func:`contact.interface.pair_surfaces`).
     """
     by_name = {b.name: b for b in bodies}
     for role, (name, _) in (("slave", slave), ("master", master)):
@@ -168,7 +170,7 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     for item in condensed.values():
         index = slice(item.offset, item.offset + item.size)
         stiffness[index, index] = item.condensation.stiffness
-    pairing = pair_with_gap(surfaces[slave[0]], surfaces[master[0]], search_distance, initial_gap)
+    pairing = pair_with_gap(surfaces[slave[0]], surfaces[master[0]], search_distance, initial_gap, pairing)
     dim = pairing.normal.shape[1]
 
     def surface_dofs(name):
@@ -203,10 +205,10 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
 
 
 def pair_with_gap(slave: Surface, master: Surface, search_distance: float,
-                  initial_gap: np.ndarray | None) -> Pairing:
-    """Pair the surfaces; ``initial_gap`` (n_slave_points,) mm, when given, replaces the
-    geometric gap (an analytic profile on flat meshes)."""
-    pairing = pair_surfaces(slave, master, search_distance=search_distance)
+                  initial_gap: np.ndarray | None, method: str = "auto") -> Pairing:
+    """Pair the surfaces by ``method``; ``initial_gap`` (n_slave_points,) mm, when given,
+    replaces the geometric gap (an analytic profile on flat meshes)."""
+    pairing = pair_surfaces(slave, master, method=method, search_distance=search_distance)
     if initial_gap is None:
         return pairing
     gap = np.asarray(initial_gap, dtype=float)

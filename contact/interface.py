@@ -1,10 +1,17 @@
 """Contact surfaces, their pairing and the kinematic operator of an interface.
 
-Small sliding: every contact point (a node of the *slave* surface) is paired once, from the
-geometry, with its projection on the *master* surface; the projection carries interpolation
-weights over the master facet's nodes, so matching and non-matching meshes are one case.
-The operator ``G`` then maps body displacements to the point's overclosure change and its
-tangential relative displacement, ``[Δh, s₁(, s₂)] = G·u``.
+Every contact point is a node of the *slave* surface, paired from the geometry with the
+*master* surface in one of two ways:
+
+* node-to-segment: the node's closest-point projection on a master facet, with
+  interpolation weights over that facet's nodes (node-to-node where the meshes match);
+* mortar (:mod:`contact.mortar`): weighted averages over the intersection of the two
+  surface meshes, on both sides, which passes the contact patch test on non-matching meshes.
+
+``pair_surfaces(..., method="auto")`` takes node-to-segment where every slave node lands on
+a master node (matching meshes) and mortar otherwise. The operator ``G`` then maps body
+displacements to the point's overclosure change and its tangential relative displacement,
+``[Δh, s₁(, s₂)] = G·u``.
 
 Units: mm (coordinates, gaps), mm² (tributary area in 3D), mm per unit thickness in 2D.
 """
@@ -18,6 +25,8 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from reduction.errors import InputError
+
+PAIRING_METHODS = ("auto", "node_to_segment", "mortar")
 
 
 @dataclass(frozen=True)
@@ -81,12 +90,17 @@ def surface_from_facets(mesh, facet_indices: np.ndarray, name: str = "surface") 
 
 @dataclass(frozen=True)
 class Pairing:
-    """Contact points (slave nodes) paired with their projections on the master surface.
+    """Contact points (slave nodes) paired with the master surface.
 
-    master_nodes: (n, k) indices into ``master.nodes``; weights: (n, k) interpolation weights.
+    master_nodes: (n, k) indices into ``master.nodes``; weights: (n, k) their weights.
     normal: (n, dim) unit vector from the slave into the master (against the master's
         outward normal). tangents: (n, dim-1, dim) orthonormal tangent frame.
     initial_overclosure: h₀ (n,) mm, negative where the surfaces are apart.
+    slave_nodes, slave_weights: (n, k_s) the slave side likewise (mortar); None means each
+        point is its own node with weight 1 (node-to-segment).
+    point_area: (n,) the area each point carries (mortar: ∫θ_j over the covered slave,
+        mm² or mm in 2D); None means the slave's tributary areas.
+    method: "node_to_segment" or "mortar".
     """
 
     slave: Surface
@@ -96,6 +110,10 @@ class Pairing:
     normal: np.ndarray
     tangents: np.ndarray
     initial_overclosure: np.ndarray
+    slave_nodes: np.ndarray | None = None
+    slave_weights: np.ndarray | None = None
+    point_area: np.ndarray | None = None
+    method: str = "node_to_segment"
 
     @property
     def n_points(self) -> int:
@@ -103,7 +121,14 @@ class Pairing:
 
     @property
     def area(self) -> np.ndarray:
-        return self.slave.area
+        return self.slave.area if self.point_area is None else self.point_area
+
+    def slave_side(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n, k_s) slave node indices and weights of every point."""
+        if self.slave_nodes is None:
+            n = self.n_points
+            return np.arange(n)[:, None], np.ones((n, 1))
+        return self.slave_nodes, self.slave_weights
 
 
 def tangent_frame(normal: np.ndarray) -> np.ndarray:
@@ -148,8 +173,32 @@ def _project_triangle(points, a, b, c):
     return bary, np.linalg.norm(points[:, None, :] - closest, axis=2)
 
 
-def pair_surfaces(slave: Surface, master: Surface, *, search_distance: float = np.inf,
-                  candidates: int = 8, name: str = "interface") -> Pairing:
+def pair_surfaces(slave: Surface, master: Surface, *, method: str = "auto",
+                  search_distance: float = np.inf, name: str = "interface") -> Pairing:
+    """Pair the surfaces by ``method``: "node_to_segment", "mortar" or "auto" (node-to-segment
+    where the meshes match, i.e. every slave node projects onto a master node, else mortar).
+
+    search_distance (mm): slave nodes farther than this from the master are an input error.
+    """
+    if method not in PAIRING_METHODS:
+        raise InputError(f"{name}: pairing must be one of {', '.join(PAIRING_METHODS)}, got {method!r}")
+    projection = pair_node_to_segment(slave, master, search_distance=search_distance, name=name)
+    if method == "node_to_segment" or (method == "auto" and meshes_match(projection)):
+        return projection
+    from contact.mortar import mortar_pairing
+
+    return mortar_pairing(slave, master, projection)
+
+
+def meshes_match(projection: Pairing, tolerance: float = 1e-6) -> bool:
+    """Whether every slave node of a node-to-segment pairing sits on a master node (in the
+    tangential sense: its weights are all 0 or 1), so node-to-segment is node-to-node."""
+    weights = projection.weights
+    return bool(np.all((weights < tolerance) | (weights > 1.0 - tolerance)))
+
+
+def pair_node_to_segment(slave: Surface, master: Surface, *, search_distance: float = np.inf,
+                         candidates: int = 8, name: str = "interface") -> Pairing:
     """Pair every slave node with its closest-point projection on the master facets.
 
     search_distance (mm): slave nodes farther than this from the master are an input error,
@@ -205,13 +254,13 @@ def kinematic_operator(pairing: Pairing, slave_dofs: np.ndarray, master_dofs: np
     n, dim = pairing.normal.shape
     frame = np.concatenate([pairing.normal[:, None, :], pairing.tangents], axis=1)  # (n, dim, dim)
     row_ids = (np.arange(n)[:, None] * dim + np.arange(dim)[None, :])  # (n, dim rows)
-    rows_s = np.repeat(row_ids[:, :, None], dim, axis=2)
-    cols_s = np.repeat(slave_dofs[:, None, :], dim, axis=1)
-    k = pairing.weights.shape[1]
-    rows_m = np.repeat(rows_s[:, None], k, axis=1)
-    cols_m = np.repeat(master_dofs[pairing.master_nodes][:, :, None, :], dim, axis=2)
-    vals_m = -pairing.weights[:, :, None, None] * frame[:, None, :, :]
-    rows = np.concatenate([rows_s.ravel(), rows_m.ravel()])
-    cols = np.concatenate([cols_s.ravel(), cols_m.ravel()])
-    vals = np.concatenate([frame.ravel(), vals_m.ravel()])
-    return sp.csr_matrix((vals, (rows, cols)), shape=(n * dim, n_columns))
+    rows, cols, vals = [], [], []
+    slave_nodes, slave_weights = pairing.slave_side()
+    for node_dofs, nodes, weights in ((slave_dofs, slave_nodes, slave_weights),
+                                      (master_dofs, pairing.master_nodes, -pairing.weights)):
+        k = weights.shape[1]
+        rows.append(np.broadcast_to(row_ids[:, None, :, None], (n, k, dim, dim)).ravel())
+        cols.append(np.broadcast_to(node_dofs[nodes][:, :, None, :], (n, k, dim, dim)).ravel())
+        vals.append((weights[:, :, None, None] * frame[:, None, :, :]).ravel())
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(n * dim, n_columns))

@@ -170,7 +170,8 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
                   for name, spec in data.get("bolts", {}).items()) if "bolts" in scene.effects else ()
     assembly = assemble(bodies, slave, master, loads=_control_patterns(scene, "loads"),
                         motions=_control_patterns(scene, "motions"),
-                        search_distance=contact.get("search_distance", np.inf), bolts=bolts)
+                        search_distance=contact.get("search_distance", np.inf), bolts=bolts,
+                        pairing=contact.get("pairing", "auto"))
     shapes = {e["name"]: e["history"] for kind in ("loads", "motions", "body_loads") for e in data.get(kind, [])}
     shapes.update({f"bolt.{bolt.name}": "ramp" for bolt in bolts})
     shapes.update({name: "history" for name in pattern_names})

@@ -9,6 +9,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from contact import procedure
+from contact.sliding import SlidingSolver
 from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from pipelines.build import Model, build
@@ -65,12 +66,23 @@ class Outcome:
     stage_times: dict = field(default_factory=dict)
 
 
+def _solver(model: Model, space: ContactSpace):
+    """The contact solver the scene's ``contact.sliding`` asks for (default auto: the pairing
+    follows the bodies once they slide by an element; see :mod:`contact.sliding`)."""
+    contact = model.scene.data["contact"]
+    sliding = contact.get("sliding", "auto")
+    if sliding == "small":
+        return ContactSolver(space, model.law, model.settings)
+    method = "node_to_segment" if contact.get("pairing") == "node_to_segment" else "mortar"
+    return SlidingSolver(model.assembly, model.law, model.settings, mode=sliding, method=method, space=space)
+
+
 def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool = True,
               resume: bool = False) -> Outcome:
     stage_times = {}
     clock = time.perf_counter()
     space = ContactSpace(model.assembly.structure)
-    solver = ContactSolver(space, model.law, model.settings)
+    solver = _solver(model, space)
     stage_times["contact_space_s"] = time.perf_counter() - clock
     effects = model.scene.effects
     proc = model.procedure
@@ -81,6 +93,8 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     out_dir.mkdir(parents=True, exist_ok=True)
     writer = ResultsWriter(out_dir / "results.h5", model, space, record_every=settings.get("record_every", 1),
                            resume=resume)
+    if isinstance(solver, SlidingSolver) and writer.meter is not None:
+        solver.listeners.append(lambda current: setattr(writer.meter, "space", current))
     bar = ProgressBar(total, progress, model.scene.name,
                       done=writer.snapshot.cycle_number if writer.snapshot else 0)
     writer.progress = bar
@@ -106,6 +120,8 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     stage_times["outputs_s"] = time.perf_counter() - clock
     summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
                **result.figures}
+    summary.update(solver.summary() if isinstance(solver, SlidingSolver) else
+                   {"sliding": "small", "sliding_mode": "small", "pairing": model.assembly.pairing.method})
     if model.coupling is not None:
         summary.update(model.coupling.summary())
     if writer.snapshot is not None:

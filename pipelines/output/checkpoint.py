@@ -14,6 +14,7 @@ from dataclasses import fields
 import h5py
 
 from contact.law import ContactState
+from contact.sliding import SlidingState
 from contact.procedure import CycleSummary, Snapshot
 from contact.solver import Equilibrium
 
@@ -22,15 +23,17 @@ SUMMARY_ARRAYS = ("pressure", "shear", "cof", "max_utilised_cof", "max_shear", "
 
 
 def _write_state(group: h5py.Group, state: ContactState) -> None:
-    for item in fields(ContactState):
+    for item in fields(state):  # a finite-sliding state adds the master's wear and its pairing
         value = getattr(state, item.name)
         if value is not None:
             group.create_dataset(item.name, data=value)
 
 
 def _read_state(group: h5py.Group) -> ContactState:
-    return ContactState(**{item.name: group[item.name][()] if item.name in group else None
-                           for item in fields(ContactState)})
+    kind = SlidingState if any(item.name in group for item in fields(SlidingState)
+                               if item.name not in ContactState.__dataclass_fields__) else ContactState
+    return kind(**{item.name: group[item.name][()] if item.name in group else None
+                   for item in fields(kind)})
 
 
 def write_snapshot(group: h5py.Group, snapshot: Snapshot, meter) -> None:

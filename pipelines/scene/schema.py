@@ -99,6 +99,13 @@ SCHEMA = {
         "wear_form": (str, False, lambda v: None if v in ("pressure", "shear") else
                       "must be 'pressure' or 'shear'", "Archard driver"),
         "search_distance": (NUMBER, False, _positive, "largest slave-master distance, mm"),
+        "pairing": (str, False, lambda v: None if v in ("auto", "node_to_segment", "mortar") else
+                    "must be 'auto', 'node_to_segment' or 'mortar'",
+                    "surface pairing; auto: node-to-segment on matching meshes, else mortar"),
+        "sliding": (str, False, lambda v: None if v in ("auto", "small", "finite") else
+                    "must be 'auto', 'small' or 'finite'",
+                    "pairing fixed (small) or following the bodies (finite); auto: finite once "
+                    "the slip reaches an element"),
     },
     "coupling": {
         "body": (str, True, None, "the contact body that is the counterweight"),

@@ -1,4 +1,6 @@
-"""Non-matching meshes: points project onto the master facets with interpolation weights."""
+"""Non-matching meshes paired node-to-segment (``contact.pairing = "node_to_segment"``):
+points project onto the master facets with interpolation weights. The automatic choice on
+these meshes is mortar (tests/contact/test_mortar.py)."""
 
 import numpy as np
 import pytest
@@ -10,7 +12,8 @@ from pipelines.jobs.validate import SCENE, check_hertz
 
 def test_hertz_holds_on_non_matching_meshes():
     # Cylinder at 0.05 mm, plane at 0.043 mm (both finer than a/25): nodes do not match.
-    model = build(scenes.load(SCENE, {"bodies.plane.mesh.contact_size": 0.043}))
+    model = build(scenes.load(SCENE, {"bodies.plane.mesh.contact_size": 0.043,
+                                      "contact.pairing": "node_to_segment"}))
     pairing = model.assembly.pairing
     weights = pairing.weights
     assert np.allclose(weights.sum(axis=1), 1.0)
@@ -24,8 +27,8 @@ def test_force_balance_on_non_matching_flat_blocks():
     """A block pressed on a block with a 7×7 against a 10×10 face mesh.
 
     Force and mean pressure are exact. Node-to-segment contact on non-matching meshes does
-    not pass the patch test: point pressures scatter (here up to 28 % in the middle), which
-    the README states; matching meshes (the shipped scenes) do not have this."""
+    not pass the patch test: point pressures scatter (here up to 28 % in the middle); mortar
+    pairing, the default on non-matching meshes, does not have this."""
     text = {
         "scene.dimension": 3, "scene.effects": [],
         "bodies.cylinder.mesh": {"generator": "flat_block", "size_x": 10.0, "size_y": 10.0, "height": 4.0,
@@ -36,6 +39,7 @@ def test_force_balance_on_non_matching_flat_blocks():
         "bodies.plane.fixed": {"nodes": {"axis": "z", "value": -4.0}, "components": ["ux", "uy", "uz"]},
         "contact.slave": {"body": "cylinder", "axis": "z", "value": 0.0},
         "contact.master": {"body": "plane", "axis": "z", "value": 0.0},
+        "contact.pairing": "node_to_segment",
         "loads": [{"name": "press", "dof": "cylinder.rp.uz", "value": -1000.0, "history": "ramp"}],
         "motions": [{"name": "hold", "dof": "cylinder.rp.ux", "value": 0.0, "history": "constant"},
                     {"name": "hold_y", "dof": "cylinder.rp.uy", "value": 0.0, "history": "constant"}],

@@ -1,0 +1,178 @@
+"""Finite sliding and wear on each body's own surface: gross-slip fretting of a cylinder on a flat.
+
+examples/gross_slip_fretting.toml: R = 80 mm, 1066 N/mm (Hertz a = 1.28 mm), element 0.1 mm,
+stroke about ±0.5 mm, energy wear with w = 1e-8 (cylinder) and 3e-8 mm²/N (flat). In gross
+slip every point of the cylinder's contact slides, so its scar is the contact width 2a; a
+point of the flat is rubbed while the contact passes over it, so the flat's scar is 2a + 2δ.
+The worn volumes are w_i × the frictional dissipation, whichever body: their ratio is the
+ratio of the wear coefficients, and their sum is (w₁ + w₂) × the dissipation measured
+globally (external work − stored energy − energy released by removed material).
+"""
+
+import h5py
+import numpy as np
+import pytest
+
+from contact import procedure
+from contact.energy import EnergyMeter
+from contact.sliding import SlidingSolver, SlidingState, worn_volumes
+from contact.solver import Effects
+from pipelines import scene as scenes
+from pipelines.build import build
+from pipelines.checkpoint import _read_state, _write_state
+from pipelines.run import run_scene
+
+try:
+    from threadpoolctl import threadpool_limits
+except ImportError:
+    threadpool_limits = None
+
+SCENE = "examples/gross_slip_fretting.toml"
+ELEMENT = 0.1  # mm, the contact element size of the scene
+
+
+@pytest.fixture(autouse=True, scope="module")
+def single_threaded_blas():
+    """Tiny dense systems: oversubscribed BLAS threads only slow them down."""
+    if threadpool_limits is None:
+        yield
+        return
+    with threadpool_limits(limits=1, user_api="blas"):
+        yield
+
+
+def _run(mode, overrides=None):
+    model = build(scenes.load(SCENE, {"contact.sliding": mode, **(overrides or {})}))
+    solver = SlidingSolver(model.assembly, model.law, model.settings, mode=mode)
+    meter = EnergyMeter(solver.space, model.law)
+    solver.listeners.append(lambda space: setattr(meter, "space", space))
+
+    class Meter(procedure.Observer):
+        def increment(self, record):
+            self.energies = meter.update(record.equilibrium, record.state)
+
+    observer = Meter()
+    result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
+                           cof_evolution=False, wear=True, observer=observer)
+    work, stored = observer.energies
+    dissipation = work + meter.stick_source - stored - meter.wear_release
+    return model, solver, result, dissipation
+
+
+def _worn_width(x, depth):
+    """Distance between the outermost nodes worn deeper than 0.1 % of the deepest, mm."""
+    worn = x[depth > 1e-3 * depth.max()]
+    return float(worn.max() - worn.min())
+
+
+def _stroke(model, result):
+    """Relative sliding amplitude δ at the contact centre, mm (irreversible + elastic slip)."""
+    centre = np.argmin(np.abs(model.assembly.pairing.slave.coordinates[:, 0]))
+    return 0.5 * float(result.cycles[-1].slip_range[centre]) + model.law.critical_slip
+
+
+@pytest.fixture(scope="module")
+def finite():
+    return _run("finite")
+
+
+def test_gross_slip_scar_of_the_flat_is_wider_by_twice_the_stroke(finite):
+    model, solver, result, _ = finite
+    pairing = model.assembly.pairing
+    cylinder = _worn_width(pairing.slave.coordinates[:, 0], result.state.wear_depth[0])
+    flat = _worn_width(pairing.master.coordinates[:, 0], result.state.master_wear)
+    stroke = _stroke(model, result)
+    assert 0.4 < stroke < 0.6  # comparable to the contact half-width a = 1.28 mm
+    assert cylinder == pytest.approx(2 * 1.2833, abs=2 * ELEMENT)
+    assert abs(flat - (cylinder + 2 * stroke)) < ELEMENT
+    assert solver.repairs > 0
+
+
+def test_small_sliding_cannot_widen_the_flat_scar():
+    """With the pairing fixed, the flat's wear stays where the cylinder's points started."""
+    model, _, result, _ = _run("small", {"procedure.wear_cycles": 1})
+    x = model.assembly.pairing.slave.coordinates[:, 0]
+    widths = [_worn_width(x, depth) for depth in result.state.wear_depth]
+    assert widths[1] == pytest.approx(widths[0], abs=1e-9)
+    assert widths[1] < widths[0] + 2 * _stroke(model, result) - 5 * ELEMENT
+
+
+def test_worn_volumes_follow_the_wear_coefficients(finite):
+    model, solver, result, _ = finite
+    cylinder, flat = worn_volumes(solver.pairing, result.state)
+    w_cylinder, w_flat = model.law.wear_coefficients
+    assert flat / cylinder == pytest.approx(w_flat / w_cylinder, rel=1e-9)
+
+
+def test_energy_identity_holds_with_finite_sliding(finite):
+    model, solver, result, dissipation = finite
+    worn = sum(worn_volumes(solver.pairing, result.state))
+    assert worn == pytest.approx(sum(model.law.wear_coefficients) * dissipation, rel=0.01)
+
+
+def test_auto_stays_small_while_slip_is_below_an_element():
+    """A ±20 µm stroke (a fifth of an element): auto never re-pairs and gives small sliding's
+    answer exactly."""
+    small = _run("small", {"motions": [{"name": "tangential", "dof": "cylinder.rp.ux", "value": 0.05,
+                                         "history": "cyclic"}], "procedure.wear_cycles": 1})
+    auto = _run("auto", {"motions": [{"name": "tangential", "dof": "cylinder.rp.ux", "value": 0.05,
+                                       "history": "cyclic"}], "procedure.wear_cycles": 1})
+    assert auto[1].summary()["sliding"] == "small" and auto[1].repairs == 0
+    assert np.array_equal(auto[2].state.wear_depth, small[2].state.wear_depth)
+
+
+def test_run_summary_says_auto_chose_finite_sliding(tmp_path):
+    scene = scenes.load(SCENE, {"contact.sliding": "auto", "procedure.wear_cycles": 1})
+    outcome = run_scene(scene, tmp_path, progress=False, plots=False)
+    assert outcome.summary["sliding"] == "finite"
+    assert outcome.summary["sliding_mode"] == "auto"
+    assert outcome.summary["repairings"] > 0
+
+
+def test_checkpoint_keeps_the_master_wear_and_the_pairing(finite, tmp_path):
+    state = finite[2].state
+    assert isinstance(state, SlidingState) and state.paired_at is not None
+    with h5py.File(tmp_path / "state.h5", "w") as file:
+        _write_state(file.create_group("state"), state)
+    with h5py.File(tmp_path / "state.h5", "r") as file:
+        back = _read_state(file["state"])
+    assert isinstance(back, SlidingState)
+    assert np.array_equal(back.master_wear, state.master_wear)
+    assert np.array_equal(back.paired_at, state.paired_at)
+
+
+def test_3d_block_slid_off_its_partner_is_carried_by_the_overlap():
+    """A 7×7 face slid by about 1.5 mm over a 10×10 face (10 × 10 mm each): with finite
+    sliding the part that has left the lower face opens and the overlap carries the load;
+    with the pairing fixed every point would still be pressed."""
+    overrides = {
+        "scene.dimension": 3, "scene.effects": [], "materials.ti64.poisson_ratio": 0.0,
+        "bodies.cylinder.mesh": {"generator": "flat_block", "size_x": 10.0, "size_y": 10.0, "height": 4.0,
+                                 "n_x": 7, "n_y": 7, "n_z": 3, "z0": 0.0},
+        "bodies.plane.mesh": {"generator": "flat_block", "size_x": 10.0, "size_y": 10.0, "height": 4.0,
+                              "n_x": 10, "n_y": 10, "n_z": 3, "z0": -4.0},
+        "bodies.cylinder.reference_points.rp": {"nodes": {"axis": "z", "value": 4.0}, "position": [0.0, 0.0, 4.0]},
+        "bodies.plane.fixed": {"nodes": {"axis": "z", "value": -4.0}, "components": ["ux", "uy", "uz"]},
+        "contact.slave": {"body": "cylinder", "axis": "z", "value": 0.0},
+        "contact.master": {"body": "plane", "axis": "z", "value": 0.0},
+        "loads": [{"name": "press", "dof": "cylinder.rp.uz", "value": -1000.0, "history": "ramp"}],
+        "motions": [{"name": "slide", "dof": "cylinder.rp.ux", "value": 1.5, "history": "cyclic"},
+                    {"name": "hold_y", "dof": "cylinder.rp.uy", "value": 0.0, "history": "constant"}],
+    }
+    from pipelines.validate import SCENE as CYLINDER
+
+    model = build(scenes.load(CYLINDER, overrides))
+    solver = SlidingSolver(model.assembly, model.law, model.settings, mode="finite")
+    equilibrium, state = solver.initial_equilibrium(), model.initial_state()
+    for k in range(1, 4):
+        equilibrium, state, _, _ = solver.increment(equilibrium, state, model.program.preload(k / 3), Effects())
+    for k in range(1, 6):  # a quarter cycle: out to the full 1.5 mm
+        equilibrium, state, _, _ = solver.increment(equilibrium, state, model.program.cycle(k / 20), Effects())
+    normal = equilibrium.forces.reshape(-1, 3)[:, 0]
+    x = model.assembly.pairing.slave.coordinates[:, 0]
+    overlap_edge = 5.0 - 1.5
+    row = 10.0 / 7  # mm, one slave element
+    assert normal.sum() == pytest.approx(1000.0, rel=1e-9)
+    assert solver.repairs > 0
+    assert x[normal > 0].max() == pytest.approx(overlap_edge, abs=row)
+    assert solver.area[normal > 0].sum() == pytest.approx(10.0 * (10.0 - 1.5), abs=10.0 * row)
