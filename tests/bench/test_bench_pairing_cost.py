@@ -19,7 +19,7 @@ from contact.solver import ContactSolver, Effects
 from contact.structure import ContactSpace
 from pipelines import scene as scenes
 from pipelines.build import build
-from pipelines.validate import SCENE
+from pipelines.jobs.validate import SCENE
 
 try:
     from threadpoolctl import threadpool_limits

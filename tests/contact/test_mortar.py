@@ -23,7 +23,7 @@ from contact.solver import ContactSolver, Effects
 from contact.structure import ContactSpace
 from pipelines import scene as scenes
 from pipelines.build import build
-from pipelines.validate import SCENE, check_hertz
+from pipelines.jobs.validate import SCENE, check_hertz
 
 PRESS = 1000.0  # N on 100 mm²: p = 10 MPa
 COF = 0.56      # the scene's μ

@@ -9,6 +9,8 @@ ratio of the wear coefficients, and their sum is (w₁ + w₂) × the dissipatio
 globally (external work − stored energy − energy released by removed material).
 """
 
+from pathlib import Path
+
 import h5py
 import numpy as np
 import pytest
@@ -19,15 +21,15 @@ from contact.sliding import SlidingSolver, SlidingState, worn_volumes
 from contact.solver import Effects
 from pipelines import scene as scenes
 from pipelines.build import build
-from pipelines.checkpoint import _read_state, _write_state
-from pipelines.run import run_scene
+from pipelines.output.checkpoint import _read_state, _write_state
+from pipelines.jobs.run import run_scene
 
 try:
     from threadpoolctl import threadpool_limits
 except ImportError:
     threadpool_limits = None
 
-SCENE = "examples/gross_slip_fretting.toml"
+SCENE = str(Path(__file__).resolve().parents[2] / "examples" / "gross_slip_fretting.toml")
 ELEMENT = 0.1  # mm, the contact element size of the scene
 
 
@@ -159,7 +161,7 @@ def test_3d_block_slid_off_its_partner_is_carried_by_the_overlap():
         "motions": [{"name": "slide", "dof": "cylinder.rp.ux", "value": 1.5, "history": "cyclic"},
                     {"name": "hold_y", "dof": "cylinder.rp.uy", "value": 0.0, "history": "constant"}],
     }
-    from pipelines.validate import SCENE as CYLINDER
+    from pipelines.jobs.validate import SCENE as CYLINDER
 
     model = build(scenes.load(CYLINDER, overrides))
     solver = SlidingSolver(model.assembly, model.law, model.settings, mode="finite")
