@@ -97,16 +97,16 @@ def cmd_demo(args) -> int:
 
 
 def cmd_limit(args) -> int:
-    from pipelines.jobs.limit import coupled_scene, find_limit, parse_range_um, plot_limit, write_limit
+    from pipelines.jobs.limit import coupled_scene, describe_limit, find_limit, parse_range_um, plot_limit, write_limit
 
     low, high = parse_range_um(args.amplitude)
     if args.tolerance <= 0:
         raise InputError("--tolerance must be positive (µm)")
     name = coupled_scene(args.scene).name
     out = Path(args.out)
-    result = find_limit(args.scene, low, high, tolerance_mm=1e-3 * args.tolerance, cache_dir=_cache(args),
-                        out_dir=out / "runs", scheduler=args.scheduler, workers=args.workers,
-                        progress=not args.quiet)
+    result = find_limit(args.scene, low, high, tolerance_mm=1e-3 * args.tolerance, grid=args.grid,
+                        cache_dir=_cache(args), out_dir=out / "runs", scheduler=args.scheduler,
+                        workers=args.workers, progress=not args.quiet)
     plot = plot_limit(result, out / "limit.png", name)
     summary = dict(result.to_json(), plot=str(plot), file=str(write_limit(result, out / "limit.json")))
     if args.json:
@@ -115,14 +115,13 @@ def cmd_limit(args) -> int:
         for run in summary["runs"]:
             print(f"  {run['amplitude_um']:8.1f} µm: {run['verdict'] or 'FAILED ' + str(run['error'])}"
                   + (f", clamp-force loss {100 * run['clamp_force_loss_fraction']:.2f} %, damaged area "
-                     f"{100 * run['damaged_area_fraction']:.1f} %" if run.get("clamp_force_loss_fraction") is not None else ""))
-        if result.limit_mm is None:
-            print(f"{name}: not stuck even at {1e3 * low:.0f} µm: the limit lies below the range")
-        elif result.bracket_mm[1] is None:
-            print(f"{name}: still stuck at {1e3 * high:.0f} µm: the limit lies above the range")
-        else:
-            print(f"{name}: amplitude limit {1e3 * result.limit_mm:.1f} µm (stuck); {1e3 * result.bracket_mm[1]:.1f} µm "
-                  f"is not (tolerance {args.tolerance:g} µm)")
+                     f"{100 * (run['damaged_area_fraction'] or 0.0):.1f} %"
+                     if run.get("clamp_force_loss_fraction") is not None else ""))
+        print(f"{name}: {describe_limit(result)} (tolerance {args.tolerance:g} µm)")
+        if not result.monotone:
+            for change in result.changes:
+                print(f"  {change.verdict_below} at {1e3 * change.below_mm:.1f} µm -> {change.verdict_above} "
+                      f"at {1e3 * change.above_mm:.1f} µm")
         print(f"  plot: {plot}")
     return 0
 
@@ -245,12 +244,14 @@ def _add_validate_and_demo_parsers(sub) -> None:
 
 
 def _add_limit_parser(sub) -> None:
-    limit = sub.add_parser("limit", help="largest wing amplitude that still ends stuck (bisection)",
-                           description="Run the coupled scene's COF and wear phases at wing amplitudes in the "
-                                       "range and narrow the bracket around the stick limit to the tolerance.")
+    limit = sub.add_parser("limit", help="lowest wing amplitude that does not end stuck (scan, then refine)",
+                           description="Run the coupled scene's COF and wear phases on a grid of wing amplitudes "
+                                       "over the range, then refine every change of verdict to the tolerance.")
     limit.add_argument("scene")
     limit.add_argument("--amplitude", required=True, metavar="LOW:HIGH", help="wing amplitude range, µm (e.g. 100:400)")
-    limit.add_argument("--tolerance", type=float, default=10.0, help="width of the final bracket, µm (default 10)")
+    limit.add_argument("--tolerance", type=float, default=10.0, help="width of each refined change, µm (default 10)")
+    limit.add_argument("--grid", type=int, default=7,
+                       help="amplitudes of the first scan (default 7); their spacing is the scan's resolution")
     limit.add_argument("--out", default="results/limit")
     limit.add_argument("--json", action="store_true")
     limit.add_argument("--quiet", action="store_true")

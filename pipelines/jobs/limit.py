@@ -1,16 +1,18 @@
-"""Amplitude limit of a coupled scene: the largest wing amplitude whose verdict is still ``stick``.
+"""Amplitude limit of a coupled scene: the lowest wing amplitude whose verdict is not ``stick``.
 
 Each amplitude is one complete contact run (preload, COF phase, wear phase) of the scene with
-its wing vibration scaled (:func:`pipelines.build.coupled_program`; nothing is re-condensed).
+its wing vibration scaled (:func:`pipelines.coupling.coupled_program`; nothing is re-condensed).
 A run in which the joint cannot carry the load at all (tangential equilibrium lost: the CW
 slides off) counts as ``loosening``, and so does a wear phase whose wear runs away (the wear
-increment does not shrink with the step: the interface slides by itself); both are noted. The search assumes that a larger amplitude never gives a
-safer verdict. It evaluates the ends of the range first, then narrows the bracket
-[largest stuck amplitude, smallest amplitude that is not stuck] in rounds of as many
-amplitudes as there are workers (one worker: bisection), until the bracket is no wider than
-the tolerance. The limit reported is the bracket's lower end: an amplitude that was run and
-found stuck. Runs are independent cases (:func:`pipelines.parallel.map_cases`) and each
-is cached (stage ``contact_run``), so a repeated or extended search only runs new amplitudes.
+increment does not shrink with the step: the interface slides by itself); both are noted.
+
+The search does not assume that a larger amplitude never gives a safer verdict: it scans a
+grid of amplitudes over the range, then refines every change of verdict to the tolerance
+(:mod:`pipelines.jobs.scan`), each round running as many amplitudes as there are workers.
+The limit is the lowest amplitude found not stuck; every change of verdict is listed, and a
+verdict that returns to ``stick`` above the limit is reported as non-monotone. Runs are
+independent cases (:func:`pipelines.parallel.map_cases`) and each is cached (stage
+``contact_run``), so a repeated or extended search only runs new amplitudes.
 
 Amplitudes in mm internally; the command line takes µm, as engineers quote wing amplitudes.
 """
@@ -48,25 +50,44 @@ class AmplitudeRun:
 
 @dataclass
 class LimitResult:
-    """limit_mm: largest amplitude found stuck (None if even the lowest was not); bracket_mm:
-    (stuck, not stuck) amplitudes around the limit (None where the range did not bracket it)."""
+    """limit_mm: the lowest amplitude found not stuck (None: stuck over the whole range);
+    bracket_mm: (largest stuck amplitude below it or None, limit_mm); range_mm: the range
+    searched; changes: every change of verdict (:class:`pipelines.jobs.scan.Change`);
+    monotone: False when a verdict returns to stick above the limit."""
 
     limit_mm: float | None
     bracket_mm: tuple
     tolerance_mm: float
     runs: list = field(default_factory=list)
+    range_mm: tuple = (None, None)
+    changes: list = field(default_factory=list)
+    monotone: bool = True
+
+    @property
+    def margin_limit_mm(self) -> float | None:
+        """What margins divide: the limit, or the top of the range where all was stuck (then the
+        margins are lower bounds)."""
+        return self.limit_mm if self.limit_mm is not None else self.range_mm[1]
 
     def to_json(self) -> dict:
         runs = sorted(self.runs, key=lambda r: r.amplitude_mm)
         return {
-            "limit_um": None if self.limit_mm is None else float(1e3 * self.limit_mm),
+            "limit_um": _um(self.limit_mm),
             "limit_mm": None if self.limit_mm is None else float(self.limit_mm),
-            "bracket_um": [None if a is None else float(1e3 * a) for a in self.bracket_mm],
+            "bracket_um": [_um(a) for a in self.bracket_mm],
             "tolerance_um": float(1e3 * self.tolerance_mm),
+            "range_um": [_um(a) for a in self.range_mm],
+            "monotone": self.monotone,
+            "changes": [{"below_um": _um(c.below_mm), "above_um": _um(c.above_mm),
+                         "verdict_below": c.verdict_below, "verdict_above": c.verdict_above} for c in self.changes],
             "runs": [{"amplitude_um": float(1e3 * r.amplitude_mm), "verdict": r.verdict, "error": r.error,
                       "note": r.figures.get("note"),
                       **{k: r.figures.get(k) for k in FIGURES}} for r in runs],
         }
+
+
+def _um(amplitude_mm: float | None) -> float | None:
+    return None if amplitude_mm is None else float(1e3 * amplitude_mm)
 
 
 def parse_range_um(text: str) -> tuple[float, float]:
@@ -156,10 +177,10 @@ def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_d
     return cache.get("contact_run", inputs, compute)
 
 
-def find_limit(scene_path, low_mm: float, high_mm: float, *, tolerance_mm: float = 0.01,
+def find_limit(scene_path, low_mm: float, high_mm: float, *, tolerance_mm: float = 0.01, grid: int = 7,
                overrides: dict | None = None, cache_dir=None, out_dir=None, scheduler: str | None = None,
                workers: int | None = None, progress: bool = True) -> LimitResult:
-    """Bracket and narrow the stick limit of the wing amplitude on [low_mm, high_mm] (module doc)."""
+    """Scan ``grid`` amplitudes over [low_mm, high_mm] and refine every change of verdict (module doc)."""
     from dask.system import cpu_count
 
     from pipelines.parallel import cluster, map_cases
@@ -169,21 +190,26 @@ def find_limit(scene_path, low_mm: float, high_mm: float, *, tolerance_mm: float
         raise InputError("amplitude range needs 0 < low < high")
     if tolerance_mm <= 0:
         raise InputError("the limit tolerance must be positive")
+    if grid < 2:
+        raise InputError("the amplitude grid needs at least 2 amplitudes")
     parallel = max(1, workers if workers else (cpu_count() if scheduler is None else 2))
+    search = (scene_path, low_mm, high_mm, tolerance_mm, grid, overrides, cache_dir, out_dir)
     if workers == 0:
-        return _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out_dir,
-                       {"scheduler": None, "workers": 0}, 1, progress, map_cases)
+        return _search(*search, {"scheduler": None, "workers": 0}, 1, progress, map_cases)
     with cluster(scheduler, workers) as where:
-        return _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out_dir, where,
-                       parallel, progress, map_cases)
+        return _search(*search, where, parallel, progress, map_cases)
 
 
-def _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out_dir, where, parallel,
+def _search(scene_path, low_mm, high_mm, tolerance_mm, grid, overrides, cache_dir, out_dir, where, parallel,
             progress, map_cases) -> LimitResult:
+    from pipelines.jobs.scan import scan
+
     runs: dict[float, AmplitudeRun] = {}
     models = BuiltModels()
+    rounds = iter(range(1, 10_000))
 
-    def evaluate(amplitudes, label):
+    def evaluate(amplitudes):
+        label = f"limit: round {next(rounds)}"
         cases = [(float(a), {"scene_path": str(scene_path), "overrides": overrides or {}, "amplitude_mm": float(a),
                              "cache_dir": None if cache_dir is None else str(cache_dir),
                              "out_dir": None if out_dir is None else str(out_dir)}) for a in amplitudes]
@@ -195,23 +221,11 @@ def _search(scene_path, low_mm, high_mm, tolerance_mm, overrides, cache_dir, out
         if failed:
             raise InputError("the limit search cannot continue: the run at "
                              + "; ".join(f"{1e3 * r.amplitude_mm:.1f} µm failed ({r.error})" for r in failed))
+        return {a: runs[a].verdict for a in amplitudes}
 
-    evaluate([low_mm, high_mm], "limit: range ends")
-    if not runs[low_mm].safe:
-        return LimitResult(None, (None, low_mm), tolerance_mm, list(runs.values()))
-    if runs[high_mm].safe:
-        return LimitResult(high_mm, (high_mm, None), tolerance_mm, list(runs.values()))
-    lower, upper = low_mm, high_mm
-    round_number = 0
-    while upper - lower > tolerance_mm:
-        round_number += 1
-        points = [float(a) for a in lower + (upper - lower) * np.arange(1, parallel + 1) / (parallel + 1)]
-        evaluate(points, f"limit: round {round_number}")
-        safe = [a for a in points if runs[a].safe]
-        unsafe = [a for a in points if not runs[a].safe]
-        lower = float(max(safe, default=lower))
-        upper = float(min([a for a in unsafe if a > lower], default=upper))
-    return LimitResult(lower, (lower, upper), tolerance_mm, list(runs.values()))
+    found = scan(evaluate, low_mm, high_mm, tolerance_mm=tolerance_mm, grid=grid, parallel=parallel)
+    return LimitResult(found.limit_mm, (found.stuck_below_mm, found.limit_mm), tolerance_mm, list(runs.values()),
+                       (low_mm, high_mm), found.changes, found.monotone)
 
 
 def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
@@ -240,18 +254,30 @@ def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
                        marker="x", color="tab:red", label="slides off / runaway wear", zorder=2, clip_on=False)
         if result.limit_mm is not None:
             ax.axvline(1e3 * result.limit_mm, color="k", linestyle="--", linewidth=1)
+        for change in result.changes if not result.monotone else ():
+            if change.verdict_above == SAFE:  # back to stick above the limit
+                ax.axvspan(1e3 * change.below_mm, 1e3 * change.above_mm, color="tab:purple", alpha=0.3)
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
     axes[0].legend(loc="upper left")
-    limit = "not bracketed" if result.limit_mm is None or result.bracket_mm[1] is None else \
-        f"limit {1e3 * result.limit_mm:.0f} µm (next run {1e3 * result.bracket_mm[1]:.0f} µm not stuck)"
-    axes[0].set_title(f"{title}: {limit}")
+    axes[0].set_title(f"{title}: {describe_limit(result)}", fontsize=10)
     axes[1].set_xlabel("wing amplitude (µm)")
     figure.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=120)
     plt.close(figure)
     return path
+
+
+def describe_limit(result: LimitResult) -> str:
+    """The limit in one line: where it lies, and whether the verdict is monotone."""
+    low, high = result.range_mm
+    if result.limit_mm is None:
+        return f"stuck up to {1e3 * high:.0f} µm: the limit lies above the range"
+    if result.bracket_mm[0] is None:
+        return f"not stuck even at {1e3 * low:.0f} µm: the limit lies below the range"
+    text = (f"limit {1e3 * result.limit_mm:.1f} µm (not stuck; {1e3 * result.bracket_mm[0]:.1f} µm is stuck)")
+    return text if result.monotone else text + ", NOT MONOTONE: stuck again above it"
 
 
 def write_limit(result: LimitResult, path: Path) -> Path:

@@ -97,8 +97,7 @@ def margins_of(scene, sweep, limit: LimitResult, cache) -> MarginResult:
     counterweight = CouplingSettings.of(scene).counterweight - 1
     factor = calibration_factor(scene, cache)
     amplitude = factor * sweep.wing_amplitude[:, counterweight]
-    margin = (np.full_like(amplitude, np.nan) if limit.limit_mm is None
-              else np.divide(limit.limit_mm, amplitude, out=np.full_like(amplitude, np.inf), where=amplitude > 0))
+    margin = np.divide(limit.margin_limit_mm, amplitude, out=np.full_like(amplitude, np.inf), where=amplitude > 0)
     speeds = np.asarray(sweep.speeds_rpm, dtype=float)
     return MarginResult(speeds, amplitude, factor, limit, margin, float(speeds.max()))
 

@@ -197,14 +197,33 @@ def test_limit_search_brackets_the_limit_to_the_tolerance(tmp_path, monkeypatch)
     monkeypatch.setattr(limits, "run_amplitude", _fake_run)
     result = limits.find_limit(SCENE, 0.1, 0.4, tolerance_mm=0.005, cache_dir=str(tmp_path), workers=0,
                                progress=False)
-    low, high = result.bracket_mm
-    assert low < 0.2637 <= high and high - low <= 0.005
-    assert result.limit_mm == low
+    stuck, limit = result.bracket_mm
+    assert stuck < 0.2637 <= limit and limit - stuck <= 0.005
+    assert result.limit_mm == limit and result.monotone
+    assert [(c.verdict_below, c.verdict_above) for c in result.changes] == [("stick", "damage"), ("damage", "loosening")]
     calls = (tmp_path / "calls.txt").read_text().split()
     assert len(calls) == len(set(calls)) == len(result.runs)  # every amplitude runs once
-    assert len(calls) <= 2 + int(np.ceil(np.log2(0.3 / 0.005)))  # bisection
-    assert not limits.find_limit(SCENE, 0.3, 0.4, tolerance_mm=0.01, cache_dir=str(tmp_path), workers=0,
-                                 progress=False).limit_mm
+    assert limits.find_limit(SCENE, 0.3, 0.4, tolerance_mm=0.01, cache_dir=str(tmp_path), workers=0,
+                             progress=False).bracket_mm == (None, 0.3)  # not stuck even at the lowest
+
+
+def _non_monotone_run(scene_path, overrides, amplitude_mm, cache_dir, out_dir=None, models=None):
+    """Stand-in for the measured case: loosening from 256 µm, stuck again from 290 to 350 µm."""
+    verdict = "loosening" if 0.256 <= amplitude_mm < 0.29 or amplitude_mm >= 0.35 else "stick"
+    return limits.AmplitudeRun(amplitude_mm, verdict, {"clamp_force_loss_fraction": 0.0})
+
+
+def test_limit_search_says_when_the_verdict_is_not_monotone(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(limits, "run_amplitude", _non_monotone_run)
+    assert main(["limit", str(SCENE), "--amplitude", "100:400", "--tolerance", "5", "--grid", "13",
+                 "--workers", "0", "--cache", str(tmp_path), "--out", str(tmp_path / "limit"), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert not summary["monotone"] and 256 <= summary["limit_um"] <= 261
+    assert [(c["verdict_below"], c["verdict_above"]) for c in summary["changes"]] == [
+        ("stick", "loosening"), ("loosening", "stick"), ("stick", "loosening")]
+    assert main(["limit", str(SCENE), "--amplitude", "100:400", "--tolerance", "5", "--grid", "13",
+                 "--workers", "0", "--cache", str(tmp_path), "--out", str(tmp_path / "limit")]) == 0
+    assert "NOT MONOTONE" in capsys.readouterr().out
 
 
 def test_limit_command_reports_bad_ranges(capsys):
