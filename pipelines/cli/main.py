@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -189,6 +190,57 @@ def cmd_study(args) -> int:
     return 0
 
 
+def _percent(value) -> str:
+    return "-" if value is None else f"{100 * value:.1f}"
+
+
+def _sizes(text: str) -> list[float]:
+    try:
+        sizes = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise InputError(f"--sizes {text!r}: use element sizes in mm separated by commas, e.g. 10,5,2.5") from None
+    if len(sizes) < 2 or min(sizes) <= 0:
+        raise InputError(f"--sizes {text!r}: needs at least two positive element sizes (mm)")
+    return sizes
+
+
+def cmd_convergence(args) -> int:
+    """`fretwork study convergence`: a table per size, the converged size, Richardson estimates."""
+    from pipelines.jobs.limit import coupled_scene, parse_range_um
+    from pipelines.studies.convergence import convergence_study, plot_convergence
+
+    sizes = _sizes(args.sizes)
+    limit_range = None
+    if args.amplitude:
+        limit_range = parse_range_um(args.amplitude)
+        coupled_scene(args.scene)
+    out = Path(args.out)
+    study = convergence_study(args.scene, sizes, out, cache_dir=_cache(args), limit_range_mm=limit_range,
+                              tolerance_mm=1e-3 * args.tolerance, grid=args.grid, scheduler=args.scheduler,
+                              workers=args.workers, progress=not args.quiet)
+    study["plot"] = str(plot_convergence(study, out / "convergence.png"))
+    (out / "convergence.json").write_text(_json(study))
+    if args.json:
+        print(_json(study))
+        return 0
+    print(f"{'size mm':>8} {'points':>7} {'verdict':>10} {'stick %':>8} {'sliding %':>9} {'worn %':>7} "
+          f"{'max wear µm':>11} {'clamp loss %':>12} {'margin':>7} {'limit µm':>9}")
+    for level in sorted(study["levels"], key=lambda level: -level["size_mm"]):
+        f = level["figures"]
+        print(f"{level['size_mm']:>8g} {level['points']:>7} {level['verdict']:>10} {_percent(f['stick_area_fraction']):>8} "
+              f"{_percent(f['active_slip_area_fraction']):>9} {_percent(f['worn_area_fraction']):>7} "
+              f"{1e3 * (f['max_wear_depth_mm'] or 0.0):>11.2f} {_percent(f['clamp_force_loss_fraction']):>12} "
+              f"{'-' if f['min_stick_margin'] is None else format(f['min_stick_margin'], '.3f'):>7} "
+              f"{'-' if level['limit_mm'] is None else format(1e3 * level['limit_mm'], '.1f'):>9}")
+    converged = study["converged_size_mm"]
+    print("converged at " + (f"{converged:g} mm (its verdict equals the next finer level's)" if converged else
+                             "no size: the verdict changes down to the finest level run"))
+    for name, found in ((n, f) for n, f in study["extrapolated"].items() if math.isfinite(f["order"])):
+        print(f"  {name}: Richardson estimate {found['estimate']:.4g} (observed order {found['order']:.2f})")
+    print(f"  plot: {study['plot']}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``fretwork`` parser: one sub-command per job."""
     parser = argparse.ArgumentParser(prog="fretwork", description=__doc__)
@@ -286,6 +338,21 @@ def _add_study_parsers(sub) -> None:
     constant.set_defaults(func=cmd_study)
     from pipelines.cli.accuracy import add_accuracy_parser
     add_accuracy_parser(kinds)
+    convergence = kinds.add_parser("convergence", help="verdict and figures at several contact element sizes",
+                                   description="Run the scene at every --sizes contact element size (mm) and, "
+                                               "with --amplitude, search its amplitude limit at each.")
+    convergence.add_argument("scene")
+    convergence.add_argument("--sizes", required=True, metavar="S1,S2,...", help="element sizes, mm (e.g. 10,5,2.5)")
+    convergence.add_argument("--amplitude", metavar="LOW:HIGH", help="also the amplitude limit on this range, µm")
+    convergence.add_argument("--tolerance", type=float, default=10.0, help="limit tolerance, µm (default 10)")
+    convergence.add_argument("--grid", type=int, default=7, help="amplitudes of each limit scan (default 7)")
+    convergence.add_argument("--out", default="results/convergence")
+    convergence.add_argument("--json", action="store_true")
+    convergence.add_argument("--quiet", action="store_true")
+    _add_cache_arguments(convergence)
+    from pipelines.parallel import add_cluster_arguments
+    add_cluster_arguments(convergence)
+    convergence.set_defaults(func=cmd_convergence)
 
 
 def main(argv=None) -> int:

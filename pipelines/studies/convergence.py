@@ -11,8 +11,13 @@ finer level and its limit is within ``limit_tolerance`` of the finest level's.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from itertools import pairwise
+from pathlib import Path
+
+import h5py
+
+from reduction.errors import InputError
 
 FIGURES = ("stick_area_fraction", "active_slip_area_fraction", "cof_evolved_area_fraction",
            "worn_area_fraction", "max_wear_depth_mm", "clamp_force_loss_fraction", "min_stick_margin",
@@ -96,3 +101,100 @@ def extrapolations(levels: list[Level]) -> dict:
     if found is not None:
         out["limit_mm"] = found
     return out
+
+
+def run_level(scene_path: str, size_mm: float, out_dir: str, cache_dir: str | None,
+              limit_range_mm: tuple | None = None, tolerance_mm: float = 0.01, grid: int = 7) -> Level:
+    """One level of the study: the scene at ``size_mm``, and its amplitude limit when asked."""
+    import time
+
+    from pipelines import scene as scenes
+    from pipelines.jobs.run import run_scene
+    from pipelines.stages import StageCache
+
+    base = scenes.load(scene_path)
+    overrides = size_overrides(base.data, size_mm)
+    clock = time.perf_counter()
+    outcome = run_scene(scenes.load(scene_path, overrides), Path(out_dir) / f"size_{size_mm:g}mm",
+                        progress=False, plots=False, cache=StageCache(cache_dir))
+    summary = outcome.summary
+    with h5py.File(outcome.results_path, "r") as results:
+        points = int(results["points/area"].shape[0])
+    level = Level(size_mm, summary["verdict"], {k: summary.get(k) for k in FIGURES}, points=points,
+                  wall_time_s=time.perf_counter() - clock)
+    if limit_range_mm is not None:
+        from pipelines.jobs.limit import find_limit
+
+        limit = find_limit(scene_path, *limit_range_mm, tolerance_mm=tolerance_mm, grid=grid, overrides=overrides,
+                           cache_dir=cache_dir, workers=0, progress=False)
+        level.limit_mm, level.monotone = limit.limit_mm, limit.monotone
+    return level
+
+
+def convergence_study(scene_path, sizes_mm, out_dir, *, cache_dir=None, limit_range_mm=None,
+                      tolerance_mm: float = 0.01, grid: int = 7, scheduler=None, workers=None,
+                      progress: bool = True) -> dict:
+    """The scene at every size (levels run side by side as cases), with Richardson estimates
+    and the converged size; a dict ready for JSON."""
+    from pipelines.parallel import map_cases
+
+    sizes = sorted({float(s) for s in sizes_mm}, reverse=True)
+    cases = [(size, {"scene_path": str(scene_path), "size_mm": size, "out_dir": str(out_dir),
+                     "cache_dir": None if cache_dir is None else str(cache_dir),
+                     "limit_range_mm": limit_range_mm, "tolerance_mm": tolerance_mm, "grid": grid})
+             for size in sizes]
+    outcomes = map_cases(run_level, cases, scheduler=scheduler, workers=workers, label="convergence",
+                         progress=progress)
+    failed = [f"{o.key:g} mm: {o.error}" for o in outcomes if o.error is not None]
+    if failed:
+        raise InputError("the convergence study could not run every level: " + "; ".join(failed))
+    levels = [o.value for o in outcomes]
+    return {"scene": str(scene_path), "levels": [asdict(level) for level in levels],
+            "extrapolated": extrapolations(levels), "converged_size_mm": converged_size(levels),
+            "verdicts_agree": len({level.verdict for level in levels}) == 1}
+
+
+def plot_convergence(study: dict, path: Path) -> Path:
+    """Figures against element size (log axis, finest right), verdicts written at each level."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    levels = sorted(study["levels"], key=lambda level: level["size_mm"])
+    sizes = [level["size_mm"] for level in levels]
+    shown = [("stick_area_fraction", "stick area", 100), ("active_slip_area_fraction", "still sliding", 100),
+             ("worn_area_fraction", "worn area", 100), ("clamp_force_loss_fraction", "clamp-force loss", 100)]
+    found = [(level["size_mm"], 1e3 * level["limit_mm"]) for level in levels if level["limit_mm"] is not None]
+    figure, axes = plt.subplots(2 if found else 1, 1, figsize=(7, 6 if found else 3.6), sharex=True, squeeze=False)
+    areas = axes[0, 0]
+    for name, label, scale in shown:
+        values = [scale * (level["figures"].get(name) or 0.0) for level in levels]
+        areas.plot(sizes, values, marker="o", label=label)
+    for level in levels:
+        areas.annotate(level["verdict"], (level["size_mm"], 0), textcoords="offset points", xytext=(0, 4),
+                       ha="center", fontsize=8)
+    areas.set_ylabel("% of nominal area\nor of clamp force")
+    areas.legend(fontsize=8)
+    if found:
+        limits = axes[1, 0]
+        limits.plot(*zip(*found), marker="s", color="k", label="amplitude limit")
+        estimate = study["extrapolated"].get("limit_mm")
+        if estimate:
+            limits.axhline(1e3 * estimate["estimate"], color="0.5", linestyle="--", label="Richardson estimate")
+        limits.set_ylabel("wing amplitude limit (µm)")
+        limits.legend(fontsize=8)
+    bottom = axes[-1, 0]
+    bottom.set_xlabel("contact element size (mm)")
+    bottom.set_xscale("log")
+    bottom.set_xticks(sizes, [f"{size:g}" for size in sizes])
+    bottom.minorticks_off()
+    bottom.invert_xaxis()
+    for ax in axes[:, 0]:
+        ax.grid(True, alpha=0.3)
+    figure.suptitle(f"mesh convergence: {Path(study['scene']).stem}", fontsize=10)
+    figure.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path

@@ -65,3 +65,27 @@ def test_size_overrides_set_every_generated_mesh():
     assert size_overrides(data, 2.5) == {"bodies.cw.mesh.contact_size": 2.5, "bodies.web.mesh.contact_size": 2.5}
     with pytest.raises(ValueError, match="contact_size"):
         size_overrides({"bodies": {"file": {"mesh": {"file": "part.inp"}}}}, 2.5)
+
+
+def test_the_study_command_runs_each_size_and_reports_the_converged_one(coarse_cylinder, tmp_path, capsys):
+    import json
+
+    from pipelines.cli.main import main
+
+    out = tmp_path / "study"
+    assert main(["study", "convergence", str(coarse_cylinder), "--sizes", "0.4,0.2", "--workers", "0",
+                 "--out", str(out), "--no-cache", "--json", "--quiet"]) == 0
+    study = json.loads(capsys.readouterr().out)
+    levels = {level["size_mm"]: level for level in study["levels"]}
+    assert levels[0.2]["points"] > 1.8 * levels[0.4]["points"]  # halving the size doubles the 2D points
+    assert levels[0.4]["verdict"] == levels[0.2]["verdict"] == "damage"  # gross slip at μ_max
+    assert study["converged_size_mm"] == 0.4 and study["verdicts_agree"]
+    assert (out / "convergence.png").stat().st_size > 10_000 and (out / "convergence.json").is_file()
+
+
+@pytest.mark.parametrize("sizes", ["5", "5,-1", "a,b"])
+def test_bad_sizes_are_one_message(coarse_cylinder, sizes, capsys):
+    from pipelines.cli.main import main
+
+    assert main(["study", "convergence", str(coarse_cylinder), "--sizes", sizes]) == 2
+    assert "--sizes" in capsys.readouterr().err
