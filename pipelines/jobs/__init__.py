@@ -1,1 +1,1 @@
-"""Jobs: the commands that run scenes (run, limit, margins, demo, validate)."""
+"""Jobs: the commands that run scenes (run, limit with its scan, margins, sweep, demo, validate)."""
