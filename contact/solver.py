@@ -10,14 +10,13 @@ in sub-steps. History variables advance only from converged sub-steps.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from contact.law import (ContactLaw, ContactState, Response, Status, advance, evaluate,
                          wear_increment)
-from contact import linear
-from contact.linear import solve_newton_system, tangent_blocks
+from contact.linear import KrylovSettings, NewtonLinearSolver, tangent_blocks
 from contact.structure import ContactSpace
 
 
@@ -37,6 +36,7 @@ class NewtonSettings:
         force scale.
     wear_cap: largest wear depth increment (mm) one sub-step may add (explicit wear
         integration); larger increments are cut back.
+    linear: how the Newton corrections are solved (:class:`contact.linear.KrylovSettings`).
     """
 
     max_iterations: int = 30
@@ -44,6 +44,7 @@ class NewtonSettings:
     displacement_tolerance: float = 1e-10
     force_tolerance: float = 1e-9
     wear_cap: float = np.inf
+    linear: KrylovSettings = field(default_factory=KrylovSettings)
 
 
 @dataclass(frozen=True)
@@ -94,12 +95,18 @@ def _rigid_modes(space: ContactSpace, stiffness_scale: float) -> np.ndarray:
 
 
 class ContactSolver:
-    """Owns the Newton iteration for one :class:`ContactSpace` and one :class:`ContactLaw`."""
+    """Owns the Newton iteration for one :class:`ContactSpace` and one :class:`ContactLaw`.
 
-    def __init__(self, space: ContactSpace, law: ContactLaw, settings: NewtonSettings = NewtonSettings()):
+    linear: the solver of the Newton corrections; it keeps factorisations between calls, so
+    it belongs to this solver alone. Default: one built from ``settings.linear``.
+    """
+
+    def __init__(self, space: ContactSpace, law: ContactLaw, settings: NewtonSettings = NewtonSettings(),
+                 linear: NewtonLinearSolver | None = None):
         self.space = space
         self.law = law
         self.settings = settings
+        self.linear = linear if linear is not None else NewtonLinearSolver(space, settings.linear)
         structure = space.structure
         self.dim = structure.dim
         self.n_points = structure.n_points
@@ -118,7 +125,7 @@ class ContactSolver:
     def forget_cached_factorisations(self) -> None:
         """Drop the factorisations the linear solver keeps across increments (a checkpoint
         boundary: a resumed run then starts from the same solver state as an uninterrupted one)."""
-        linear._solvers.pop(self.space, None)
+        self.linear = NewtonLinearSolver(self.space, self.linear.settings)
         self._last_compliance = None
 
     def initial_equilibrium(self) -> Equilibrium:
@@ -194,7 +201,7 @@ class ContactSolver:
             kn = np.broadcast_to(self.law.normal_stiffness, penetration.shape)
             penalty = kn[nearest] * self.area[nearest]
             blocks[nearest] = penalty[:, None, None] * np.eye(self.dim)
-        return (*solve_newton_system(self.space, blocks, r_kin, r_ctl), searching)
+        return (*self.linear.solve(blocks, r_kin, r_ctl), searching)
 
     def _open_step(self, r_kin, r_ctl):
         """Exact Newton step with every point open: S_q·Δq = −r_ctl off the rigid modes."""
