@@ -249,10 +249,11 @@ def _bordered(W_cc, closed_blocks, E_c, Sq, dtype) -> tuple[np.ndarray, np.ndarr
     # W·blockdiag(D) = (blockdiag(Dᵀ)·W)ᵀ since W is symmetric: the row-block product is
     # contiguous, and its transpose is the Fortran-ordered array LAPACK factorises in place.
     transposed = matrix.T
-    np.matmul(closed_blocks.transpose(0, 2, 1).astype(dtype),
-              W_cc.astype(dtype, copy=False).reshape(-1, dim, n_c),
-              out=transposed[:n_c, :n_c].reshape(-1, dim, n_c))
-    transposed[np.diag_indices(n_c)] += 1.0
+    if n_c:
+        np.matmul(closed_blocks.transpose(0, 2, 1).astype(dtype),
+                  W_cc.astype(dtype, copy=False).reshape(-1, dim, n_c),
+                  out=transposed[:n_c, :n_c].reshape(-1, dim, n_c))
+        transposed[np.diag_indices(n_c)] += 1.0
     # Eᵀ·blockdiag(D) = (blockdiag(Dᵀ)·E)ᵀ
     tangent_E = np.einsum("pji,pjm->pim", closed_blocks, E_c.reshape(-1, dim, m)).reshape(n_c, m)
     stiffness = np.abs(np.einsum("rm,rm->m", E_c, tangent_E)) + np.abs(np.diag(Sq))

@@ -145,7 +145,7 @@ class ContactSpace:
         self.Gc = Gc.tocsr()
         self.W = self._Kcc.congruence(self.Gc)
         self.W = np.ascontiguousarray(0.5 * (self.W + self.W.T))
-        compliance_Kcq = self._Kcc.solve(self._Kcq)
+        compliance_Kcq = self.compliance_Kcq = self._Kcc.solve(self._Kcq)
         self.E = Gc @ compliance_Kcq
         self.Sq = K[np.ix_(q, q)] - self._Kcq.T @ compliance_Kcq
         self.control_stiffness = np.zeros((q.size, q.size))  # locked bolts add to it
@@ -187,6 +187,10 @@ class ContactSpace:
     def driving(self, amplitudes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """g_f (mm) and f_q (N) for a vector of pattern amplitudes."""
         return self.pattern_gf @ amplitudes, self.pattern_fq @ amplitudes
+
+    def solve_contact_block(self, rhs: np.ndarray) -> np.ndarray:
+        """K_cc⁻¹·rhs (mm) for forces ``rhs`` (N) on the contact DOFs, body block by body block."""
+        return self._Kcc.solve(rhs)
 
     def displacements(self, control: np.ndarray, forces: np.ndarray, amplitudes: np.ndarray) -> np.ndarray:
         """All retained displacements (n,) mm from control DOFs q and contact forces λ (N)."""
