@@ -13,11 +13,20 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from contact.law import (ContactLaw, ContactState, Response, Status, advance, evaluate,
                          wear_increment)
 from contact.linear import KrylovSettings, NewtonLinearSolver, tangent_blocks
 from contact.structure import ContactSpace
+
+
+# A Newton step is accepted when it lowers the largest merit of this many last iterates, not
+# necessarily the last one. With a stiff elastic stick (γ_crit of 0.001 µm) a full step
+# moves whole rings of points between stick and slip at once and raises the merit for an
+# iteration or two before it falls quadratically; a monotone search cut those steps to
+# slivers and Newton crawled a ring per iteration (150 iterations for a sphere-on-flat step).
+NONMONOTONE_WINDOW = 5
 
 
 class ConvergenceError(RuntimeError):
@@ -37,6 +46,10 @@ class NewtonSettings:
     wear_cap: largest wear depth increment (mm) one sub-step may add (explicit wear
         integration); larger increments are cut back.
     linear: how the Newton corrections are solved (:class:`contact.linear.KrylovSettings`).
+    blas_threads: BLAS threads inside an increment. One: the contact matrices are small
+        enough (a 4,500-row LU in 0.8 s) that a second thread gains little on two cores and
+        loses much when they are shared (tiny products spin-wait for a busy core), and the
+        results then do not depend on the machine's thread settings.
     """
 
     max_iterations: int = 30
@@ -45,6 +58,7 @@ class NewtonSettings:
     force_tolerance: float = 1e-9
     wear_cap: float = np.inf
     linear: KrylovSettings = field(default_factory=KrylovSettings)
+    blas_threads: int = 1
 
 
 @dataclass(frozen=True)
@@ -107,6 +121,7 @@ class ContactSolver:
         self.law = law
         self.settings = settings
         self.linear = linear if linear is not None else NewtonLinearSolver(space, settings.linear)
+        self._threads = ThreadpoolController()
         structure = space.structure
         self.dim = structure.dim
         self.n_points = structure.n_points
@@ -203,6 +218,25 @@ class ContactSolver:
             blocks[nearest] = penalty[:, None, None] * np.eye(self.dim)
         return (*self.linear.solve(blocks, r_kin, r_ctl), searching)
 
+    def _first_kink(self, g, delta_g, state: ContactState, reference) -> float:
+        """Fraction of the step g → g + Δg at which the first point opens, closes or crosses
+        the stick limit |γ_tr| = γ_crit (just past it), or 1 if none does."""
+        penetration, slip = self._split(g, reference)
+        penetration = penetration - state.gap
+        change = delta_g.reshape(self.n_points, self.dim)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            contact = np.where(penetration * (penetration + change[:, 0]) < 0.0,
+                               -penetration / change[:, 0], np.inf)
+            a = state.elastic_slip + slip
+            b = change[:, 1:]
+            bb, ab = np.einsum("ij,ij->i", b, b), np.einsum("ij,ij->i", a, b)
+            cc = np.einsum("ij,ij->i", a, a) - np.broadcast_to(self.law.critical_slip, penetration.shape) ** 2
+            root = np.sqrt(ab * ab - bb * cc)
+            candidates = np.stack([(-ab - root) / bb, (-ab + root) / bb])
+            candidates = np.where((candidates > 0.0) & (penetration > 0.0), candidates, np.inf)
+        first = float(min(contact.min(initial=np.inf), np.nanmin(candidates, initial=np.inf)))
+        return min(1.0, 1.001 * first) if first > 1e-6 else 1.0
+
     def _open_step(self, r_kin, r_ctl):
         """Exact Newton step with every point open: S_q·Δq = −r_ctl off the rigid modes."""
         modes = self.rigid_modes
@@ -235,6 +269,8 @@ class ContactSolver:
             if best is None or candidate_merit < best[0]:
                 best = (candidate_merit, g, candidate)
         merit, g, (r_kin, r_ctl, response, forces) = best
+        recent = [merit]  # merits of the last iterations, for the non-monotone line search
+        history = [merit]
         for iteration in range(1, self.settings.max_iterations + 1):
             try:
                 delta_g, delta_q, searching = self._newton_step(response, g, state, r_kin, r_ctl, loaded)
@@ -242,13 +278,16 @@ class ContactSolver:
                 # A singular tangent (e.g. every point sliding under force control) or an
                 # iterative solve that gives up: this attempt fails and is cut back.
                 break
-            step = 1.0
+            # Stalled (points cycling between stick and slip): step only to the first point
+            # whose status the step changes, just past it. The linear model is right up to
+            # there, so the merit falls; the next linearisation sees the new status.
+            step = 1.0 if len(recent) > 1 else self._first_kink(g, delta_g, state, reference)
             # A contact-search step (no point closed yet) is taken whole: the merit of the
             # open configuration is no guide to how far the body has to move.
             while not searching:
                 trial = self._residual(g + step * delta_g, q + step * delta_q, state, reference, g_f, f_q)
                 trial_merit = self._merit(trial[0], trial[1], force_scale)
-                if trial_merit <= (1.0 - 1e-4 * step) * merit or step < 1.0 / 64:
+                if trial_merit <= (1.0 - 1e-4 * step) * max(recent) or step < 1.0 / 64:
                     break
                 step *= 0.5
             if searching:
@@ -257,6 +296,10 @@ class ContactSolver:
             g, q = g + step * delta_g, q + step * delta_q
             r_kin, r_ctl, response, forces = trial
             merit = trial_merit
+            recent = (recent + [merit])[-NONMONOTONE_WINDOW:]
+            history.append(merit)
+            if len(history) > NONMONOTONE_WINDOW and merit > 0.5 * min(history[:-NONMONOTONE_WINDOW]):
+                recent = [merit]  # no progress over the window (points cycling): monotone again
             if not np.all(np.isfinite(g)) or not np.all(np.isfinite(q)):
                 break
             floating = loaded and not np.any(response.dpressure_dh > 0.0)
@@ -301,7 +344,8 @@ class ContactSolver:
         point status and the iteration counters. Raises :class:`ConvergenceError` when a
         sub-step of that smallest size still fails.
         """
-        return advance_with_cutbacks(self, start, state, amplitudes, effects)
+        with self._threads.limit(limits=self.settings.blas_threads, user_api="blas"):
+            return advance_with_cutbacks(self, start, state, amplitudes, effects)
 
 
 def advance_with_cutbacks(solver, start, state: ContactState, amplitudes: np.ndarray, effects: Effects):
