@@ -60,7 +60,7 @@ class KrylovSettings:
     """
 
     direct_below: int = 300
-    relative_tolerance: float = 1e-3
+    relative_tolerance: float = 1e-6
     fresh_iterations: int = 3
     max_iterations: int = 40
     single_precision: bool = True
