@@ -91,6 +91,15 @@ class NewtonLinearSolver:
         self._rebuild_work = 0.0
         self._lost_work = 0.0
 
+    def description(self) -> str:
+        """Which path solves this interface's Newton systems, in words (for run summaries)."""
+        exact = f"exact LU of the bordered closed system below {self.settings.direct_below:g} closed rows"
+        if self.space.n_rows < self.settings.direct_below:
+            return f"dense W ({self.space.n_rows} rows): exact LU of the bordered closed system"
+        precision = "single" if self.settings.single_precision else "double"
+        return (f"dense W ({self.space.n_rows} rows): GMRES preconditioned by a {precision}-precision "
+                f"LU of an earlier Jacobian; {exact}")
+
     def solve(self, blocks: np.ndarray, r_kin: np.ndarray, r_ctl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Newton correction (Δg mm, Δq mm) for residuals r_kin (mm) and r_ctl (N)."""
         n, dim, _ = blocks.shape

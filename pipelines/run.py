@@ -105,7 +105,7 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     write_final_vtu(path, out_dir / "interface_final.vtu")
     stage_times["outputs_s"] = time.perf_counter() - clock
     summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
-               **result.figures}
+               **result.figures, "linear_solver": solver.linear.description()}
     if model.coupling is not None:
         summary.update(model.coupling.summary())
     if writer.snapshot is not None:
