@@ -21,14 +21,6 @@ from contact.linear import KrylovSettings, NewtonLinearSolver, tangent_blocks
 from contact.structure import ContactSpace
 
 
-# A Newton step is accepted when it lowers the largest merit of this many last iterates, not
-# necessarily the last one. With a stiff elastic stick (γ_crit of 0.001 µm) a full step
-# moves whole rings of points between stick and slip at once and raises the merit for an
-# iteration or two before it falls quadratically; a monotone search cut those steps to
-# slivers and Newton crawled a ring per iteration (150 iterations for a sphere-on-flat step).
-NONMONOTONE_WINDOW = 5
-
-
 class ConvergenceError(RuntimeError):
     """An increment did not converge within the allowed cutbacks; the message says why."""
 
@@ -46,6 +38,18 @@ class NewtonSettings:
     wear_cap: largest wear depth increment (mm) one sub-step may add (explicit wear
         integration); larger increments are cut back.
     linear: how the Newton corrections are solved (:class:`contact.linear.KrylovSettings`).
+    line_search_window: a sub-step whose Newton iteration fails with the monotone
+        backtracking line search is tried again, before any cutback, with a non-monotone one
+        that accepts a step when it lowers the largest merit of this many last iterates (1:
+        no second try). With a stiff elastic stick (γ_crit of 0.001 µm) a full step moves
+        whole rings of points between stick and slip at once and raises the merit for an
+        iteration or two before it falls quadratically; the monotone search cuts those steps
+        to slivers and Newton crawls a ring per iteration (150 iterations for a
+        sphere-on-flat step). When the window passes without the merit halving (points
+        cycling between stick and slip), steps stop just past the first status change until
+        it does. The monotone search comes first because elsewhere (the counterweight's wear
+        phase) the non-monotone one can reach another of the non-unique frictional
+        equilibria, from which explicit wear then runs away.
     blas_threads: BLAS threads inside an increment. One: the contact matrices are small
         enough (a 4,500-row LU in 0.8 s) that a second thread gains little on two cores and
         loses much when they are shared (tiny products spin-wait for a busy core), and the
@@ -58,6 +62,7 @@ class NewtonSettings:
     force_tolerance: float = 1e-9
     wear_cap: float = np.inf
     linear: KrylovSettings = field(default_factory=KrylovSettings)
+    line_search_window: int = 5
     blas_threads: int = 1
 
 
@@ -246,7 +251,17 @@ class ContactSolver:
 
     def _solve_to(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
                   stats: IncrementStats) -> tuple[Equilibrium, Response] | None:
-        """Newton from ``start`` to the load ``amplitudes``; None if it does not converge."""
+        """Newton from ``start`` to the load ``amplitudes``; None if it does not converge.
+
+        A monotone line search first; if that fails, once more with the non-monotone one
+        (``settings.line_search_window``) before the caller cuts the step back."""
+        solved = self._newton(start, state, amplitudes, stats, window=1)
+        if solved is None and self.settings.line_search_window > 1:
+            solved = self._newton(start, state, amplitudes, stats, window=self.settings.line_search_window)
+        return solved
+
+    def _newton(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
+                stats: IncrementStats, window: int) -> tuple[Equilibrium, Response] | None:
         g_f, f_q = self.space.driving(amplitudes)
         force_scale = max(1.0, float(np.max(np.abs(f_q), initial=0.0)),
                           float(np.max(np.abs(start.forces), initial=0.0)))
@@ -269,8 +284,7 @@ class ContactSolver:
             if best is None or candidate_merit < best[0]:
                 best = (candidate_merit, g, candidate)
         merit, g, (r_kin, r_ctl, response, forces) = best
-        recent = [merit]  # merits of the last iterations, for the non-monotone line search
-        history = [merit]
+        recent, history, stalled = [merit], [merit], False  # merits for the line search
         for iteration in range(1, self.settings.max_iterations + 1):
             try:
                 delta_g, delta_q, searching = self._newton_step(response, g, state, r_kin, r_ctl, loaded)
@@ -281,7 +295,7 @@ class ContactSolver:
             # Stalled (points cycling between stick and slip): step only to the first point
             # whose status the step changes, just past it. The linear model is right up to
             # there, so the merit falls; the next linearisation sees the new status.
-            step = 1.0 if len(recent) > 1 else self._first_kink(g, delta_g, state, reference)
+            step = self._first_kink(g, delta_g, state, reference) if stalled else 1.0
             # A contact-search step (no point closed yet) is taken whole: the merit of the
             # open configuration is no guide to how far the body has to move.
             while not searching:
@@ -296,10 +310,12 @@ class ContactSolver:
             g, q = g + step * delta_g, q + step * delta_q
             r_kin, r_ctl, response, forces = trial
             merit = trial_merit
-            recent = (recent + [merit])[-NONMONOTONE_WINDOW:]
+            recent = (recent + [merit])[-window:]
             history.append(merit)
-            if len(history) > NONMONOTONE_WINDOW and merit > 0.5 * min(history[:-NONMONOTONE_WINDOW]):
-                recent = [merit]  # no progress over the window (points cycling): monotone again
+            # no progress over the window (points cycling): monotone again, kink-limited steps
+            stalled = window > 1 and len(history) > window and merit > 0.5 * min(history[:-window])
+            if stalled:
+                recent = [merit]
             if not np.all(np.isfinite(g)) or not np.all(np.isfinite(q)):
                 break
             floating = loaded and not np.any(response.dpressure_dh > 0.0)
