@@ -45,7 +45,10 @@ class KrylovSettings:
     """When the iterative path is used and how hard it works.
 
     direct_below: closed rows below which the closed block is factorised every iteration.
-    relative_tolerance: GMRES stops at ‖J·x − b‖ ≤ this × ‖b‖ (rows in mm).
+    relative_tolerance: GMRES stops at ‖J·x − b‖ ≤ this × ‖b‖ (rows in mm) ...
+    final_tolerance: ... or this × ‖b‖ for the last Newton steps (the caller says which):
+        there the inexact correction sets where Newton stops inside its tolerance, and a
+        tight one lands it where the exact LU does (within 1e-9 instead of 1e-8 relative).
     fresh_iterations: Krylov iterations a solve needs with a fresh preconditioner. Every
         iteration beyond it is work lost to an aged one; once that lost work exceeds what the
         last rebuild cost, the preconditioner is rebuilt for the next solve (pay for a
@@ -60,7 +63,8 @@ class KrylovSettings:
     """
 
     direct_below: int = 300
-    relative_tolerance: float = 1e-6
+    relative_tolerance: float = 1e-3
+    final_tolerance: float = 1e-7
     fresh_iterations: int = 3
     max_iterations: int = 40
     single_precision: bool = True
@@ -100,8 +104,11 @@ class NewtonLinearSolver:
         return (f"dense W ({self.space.n_rows} rows): GMRES preconditioned by a {precision}-precision "
                 f"LU of an earlier Jacobian; {exact}")
 
-    def solve(self, blocks: np.ndarray, r_kin: np.ndarray, r_ctl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Newton correction (Δg mm, Δq mm) for residuals r_kin (mm) and r_ctl (N)."""
+    def solve(self, blocks: np.ndarray, r_kin: np.ndarray, r_ctl: np.ndarray,
+              final: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Newton correction (Δg mm, Δq mm) for residuals r_kin (mm) and r_ctl (N); ``final``:
+        Newton is one step from its tolerance (the Krylov path then solves to
+        ``final_tolerance``)."""
         n, dim, _ = blocks.shape
         closed_points = np.flatnonzero(blocks[:, 0, 0] > 0.0)
         if closed_points.size * dim < self.settings.direct_below:
@@ -140,8 +147,8 @@ class NewtonLinearSolver:
 
         def krylov():
             rhs = np.concatenate([-r_kin[closed], -self._control_scale * r_ctl])
-            return _gmres(matvec, self._precondition, rhs, self.settings.relative_tolerance,
-                          self.settings.max_iterations)
+            tolerance = self.settings.final_tolerance if final else self.settings.relative_tolerance
+            return _gmres(matvec, self._precondition, rhs, tolerance, self.settings.max_iterations)
 
         if refactor:
             self._refactor(working, closed_blocks, W_cc, E_c)

@@ -221,7 +221,9 @@ class ContactSolver:
             kn = np.broadcast_to(self.law.normal_stiffness, penetration.shape)
             penalty = kn[nearest] * self.area[nearest]
             blocks[nearest] = penalty[:, None, None] * np.eye(self.dim)
-        return (*self.linear.solve(blocks, r_kin, r_ctl), searching)
+        # within a few decades of the tolerance, the next step should be the last
+        final = np.max(np.abs(r_kin), initial=0.0) <= 1e3 * self.settings.displacement_tolerance
+        return (*self.linear.solve(blocks, r_kin, r_ctl, final), searching)
 
     def _first_kink(self, g, delta_g, state: ContactState, reference) -> float:
         """Fraction of the step g → g + Δg at which the first point opens, closes or crosses
