@@ -27,6 +27,7 @@ from scipy.linalg import lapack
 import scipy.sparse as sp
 
 from reduction.errors import InputError
+from reduction.threads import single_threaded_blas
 
 
 @dataclass(frozen=True)
@@ -163,6 +164,10 @@ class ContactSpace:
     """Exact elimination of a :class:`Structure` onto contact kinematics and control DOFs."""
 
     def __init__(self, structure: Structure):
+        with single_threaded_blas():
+            self._eliminate(structure)
+
+    def _eliminate(self, structure: Structure) -> None:
         self.structure = structure
         n = structure.n_dofs
         G = structure.contact_operator.tocsr()
