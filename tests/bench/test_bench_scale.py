@@ -4,7 +4,8 @@ Every case runs twice in the same session, each run in its own process (its peak
 its own) with the shipped linear solver ("auto": preconditioned GMRES on large closed sets,
 an exact LU on small ones) and with the dense reference ("dense": the exact LU of the dense
 bordered system in every Newton iteration); their final pressure, shear and COF fields must
-agree to 1e-8 relative. Rows whose estimated set-up memory exceeds FRETWORK_BENCH_MEMORY_GB
+agree to 1e-8 relative (the loosening counterweight: 1e-6, see LOOSENING_TOLERANCE) and
+their verdicts must be the same. Rows whose estimated set-up memory exceeds FRETWORK_BENCH_MEMORY_GB
 (default 8, the share of a shared 2-core, 24 GB machine) or whose dense run would take hours
 are reported as not run, with the reason. Times are CPU seconds of the process (single-
 threaded BLAS: on a shared machine they measure the work, not the neighbours' load); the
@@ -67,14 +68,20 @@ def _difference(a: Path, b: Path) -> float:
                    for k in x.files)
 
 
-CASES = [  # (label, runner, arguments, reason not to run the dense reference or anything)
-    ("flat-on-flat 1,600", _flat, (40,), None),
-    ("flat-on-flat 3,600", _flat, (60,), None),
-    ("flat-on-flat 10,000", _flat, (100,), None),
-    ("CW extreme 10 mm", _scene, ("counterweight_extreme", 10.0), None),
-    ("CW extreme 5 mm", _scene, ("counterweight_extreme", 5.0), None),
-    ("CW extreme 2.5 mm", _scene, ("counterweight_extreme", 2.5), DENSE_HOURS),
-    ("2D cylinder-on-plane", _scene, ("cylinder_on_plane", None), None),
+#: agreement of the two solvers' final fields. The 10 mm counterweight loosens: 130 cycles of
+#: explicit wear on a sliding, unloading joint amplify the differences of where two Newton
+#: iterations stop inside their tolerance (1e-10 mm) to ~1e-7 whatever the linear solver
+#: (GMRES to 1e-12 in the last steps: 7e-7; to 1e-7: 1e-7); its fields after the COF phase
+#: agree to 2e-9, and the verdict must be the same.
+LOOSENING_TOLERANCE = 1e-6
+CASES = [  # (label, runner, arguments, reason not to run the dense reference, tolerance)
+    ("flat-on-flat 1,600", _flat, (40,), None, 1e-8),
+    ("flat-on-flat 3,600", _flat, (60,), None, 1e-8),
+    ("flat-on-flat 10,000", _flat, (100,), None, 1e-8),
+    ("CW extreme 10 mm", _scene, ("counterweight_extreme", 10.0), None, LOOSENING_TOLERANCE),
+    ("CW extreme 5 mm", _scene, ("counterweight_extreme", 5.0), None, 1e-8),
+    ("CW extreme 2.5 mm", _scene, ("counterweight_extreme", 2.5), DENSE_HOURS, 1e-8),
+    ("2D cylinder-on-plane", _scene, ("cylinder_on_plane", None), None, 1e-8),
 ]
 
 
@@ -99,7 +106,7 @@ def _table(rows: list[dict]) -> str:
 @pytest.mark.bench
 def test_contact_solves_from_100_to_10000_points(tmp_path):
     rows = []
-    for label, runner, arguments, no_dense in CASES:
+    for label, runner, arguments, no_dense, tolerance in CASES:
         if ONLY and not any(part in label for part in ONLY):
             continue
         reason = _skip_reason(label, arguments)
@@ -114,8 +121,9 @@ def test_contact_solves_from_100_to_10000_points(tmp_path):
         dense = runner(*arguments, "dense", tmp_path)
         difference = _difference(auto["fields"], dense["fields"])
         ratio = auto["per_increment_ms"] / dense["per_increment_ms"]
-        rows[-1].update(rel_diff=difference, ratio=ratio)
+        rows[-1].update(rel_diff=difference, ratio=ratio, tolerance=tolerance)
         rows.append({"case": label, "solver": "dense", **dense, "rel_diff": difference})
+        assert auto.get("verdict") == dense.get("verdict"), f"{label}: verdicts differ"
     for row in rows:
         row.pop("fields", None)
     out = ROOT / "results" / "bench" / "scale.json"
@@ -124,4 +132,5 @@ def test_contact_solves_from_100_to_10000_points(tmp_path):
     print(f"\nload average {os.getloadavg()}, {os.cpu_count()} CPUs; times are CPU s of one process\n"
           + _table(rows))
     for row in rows:
-        assert row.get("rel_diff", 0.0) <= 1e-8, f"{row['case']}: auto and dense differ by {row['rel_diff']:.2e}"
+        assert row.get("rel_diff", 0.0) <= row.get("tolerance", 1e-8), \
+            f"{row['case']}: auto and dense differ by {row['rel_diff']:.2e}"
