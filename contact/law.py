@@ -136,9 +136,8 @@ def evaluate(overclosure: np.ndarray, slip_increment: np.ndarray, state: Contact
     The COF is the converged μ of ``state``: it changes only in :func:`advance`.
     """
     n_points, n_tangent = slip_increment.shape
-    kn = np.broadcast_to(law.normal_stiffness, (n_points,))
-    gamma_crit = np.broadcast_to(law.critical_slip, (n_points,))
-    cof = state.cof
+    # Scalars broadcast in the arithmetic below; per-point arrays are used as they are.
+    kn, gamma_crit, cof = law.normal_stiffness, law.critical_slip, state.cof
 
     penetration = overclosure - state.gap
     closed = penetration > 0.0
@@ -148,7 +147,7 @@ def evaluate(overclosure: np.ndarray, slip_increment: np.ndarray, state: Contact
     dpressure_dh = np.where(penetration >= 0.0, kn, 0.0)
 
     trial = np.where(closed[:, None], state.elastic_slip + slip_increment, 0.0)
-    trial_norm = np.linalg.norm(trial, axis=1)
+    trial_norm = np.sqrt(np.add.reduce(trial * trial, axis=1))
     sliding = closed & (trial_norm > gamma_crit)
     sticking = closed & ~sliding
 
@@ -156,24 +155,21 @@ def evaluate(overclosure: np.ndarray, slip_increment: np.ndarray, state: Contact
     safe_norm = np.where(sliding, trial_norm, 1.0)
     direction = trial / safe_norm[:, None]
 
+    # Open points have p = 0 and γ_tr = 0, so every branch below gives them zero.
     stick_stiffness = critical_shear / gamma_crit
-    shear = np.where(sliding[:, None], critical_shear[:, None] * direction,
-                     stick_stiffness[:, None] * trial)
-    shear = np.where(closed[:, None], shear, 0.0)
+    slide = sliding[:, None]
+    shear = np.where(slide, critical_shear[:, None] * direction, stick_stiffness[:, None] * trial)
 
     identity = np.eye(n_tangent)
-    stick_ds = stick_stiffness[:, None, None] * identity
     slip_ds = (critical_shear / safe_norm)[:, None, None] * (
         identity - direction[:, :, None] * direction[:, None, :])
-    dshear_ds = np.where(sliding[:, None, None], slip_ds,
-                         np.where(sticking[:, None, None], stick_ds, 0.0))
+    dshear_ds = np.where(slide[:, :, None], slip_ds,
+                         np.where(sticking, stick_stiffness, 0.0)[:, None, None] * identity)
+    ratio = cof * kn
+    dshear_dh = np.where(slide, ratio[:, None] * direction,
+                         np.where(sticking, ratio / gamma_crit, 0.0)[:, None] * trial)
 
-    stick_dh = (cof * kn / gamma_crit)[:, None] * trial
-    slip_dh = (cof * kn)[:, None] * direction
-    dshear_dh = np.where(sliding[:, None], slip_dh, np.where(sticking[:, None], stick_dh, 0.0))
-
-    status = np.full(n_points, Status.OPEN, dtype=np.int8)
-    status[sticking] = Status.STICK
+    status = closed.astype(np.int8)  # Status.OPEN 0, STICK 1
     status[sliding] = Status.SLIP
     return Response(
         pressure=pressure,

@@ -25,11 +25,11 @@ the solver's residual test, not by this module (the condensed-versus-full test c
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as la
+from scipy.linalg.lapack import get_lapack_funcs
 
 from contact.law import Response
 from contact.structure import ContactSpace
@@ -45,7 +45,10 @@ class KrylovSettings:
     """When the iterative path is used and how hard it works.
 
     direct_below: closed rows below which the closed block is factorised every iteration.
-    relative_tolerance: GMRES stops at ‖J·x − b‖ ≤ this × ‖b‖ (rows in mm).
+    relative_tolerance: GMRES stops at ‖J·x − b‖ ≤ this × ‖b‖ (rows in mm) ...
+    final_tolerance: ... or this × ‖b‖ for the last Newton steps (the caller says which):
+        there the inexact correction sets where Newton stops inside its tolerance, and a
+        tight one lands it where the exact LU does (within 1e-9 instead of 1e-8 relative).
     fresh_iterations: Krylov iterations a solve needs with a fresh preconditioner. Every
         iteration beyond it is work lost to an aged one; once that lost work exceeds what the
         last rebuild cost, the preconditioner is rebuilt for the next solve (pay for a
@@ -61,6 +64,7 @@ class KrylovSettings:
 
     direct_below: int = 300
     relative_tolerance: float = 1e-3
+    final_tolerance: float = 1e-7
     fresh_iterations: int = 3
     max_iterations: int = 40
     single_precision: bool = True
@@ -85,21 +89,31 @@ class NewtonLinearSolver:
         self.counters = KrylovCounters()
         self._control_scale = np.ones(space.n_control)
         self._closed_key: np.ndarray | None = None
-        self._W_closed: np.ndarray | None = None
-        self._W_closed_rows: np.ndarray | None = None
+        self._compliance: dict = {}  # dtype → (closed rows, W on them)
         self._factor = None
         self._stale = True
         self._rebuild_work = 0.0
         self._lost_work = 0.0
 
-    def solve(self, blocks: np.ndarray, r_kin: np.ndarray, r_ctl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Newton correction (Δg mm, Δq mm) for residuals r_kin (mm) and r_ctl (N)."""
+    def description(self) -> str:
+        """Which path solves this interface's Newton systems, in words (for run summaries)."""
+        exact = f"exact LU of the bordered closed system below {self.settings.direct_below:g} closed rows"
+        if self.space.n_rows < self.settings.direct_below:
+            return f"dense W ({self.space.n_rows} rows): exact LU of the bordered closed system"
+        precision = "single" if self.settings.single_precision else "double"
+        return (f"dense W ({self.space.n_rows} rows): GMRES preconditioned by a {precision}-precision "
+                f"LU of an earlier Jacobian; {exact}")
+
+    def solve(self, blocks: np.ndarray, r_kin: np.ndarray, r_ctl: np.ndarray,
+              final: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Newton correction (Δg mm, Δq mm) for residuals r_kin (mm) and r_ctl (N); ``final``:
+        Newton is one step from its tolerance (the Krylov path then solves to
+        ``final_tolerance``)."""
         n, dim, _ = blocks.shape
         closed_points = np.flatnonzero(blocks[:, 0, 0] > 0.0)
         if closed_points.size * dim < self.settings.direct_below:
-            closed = (closed_points[:, None] * dim + np.arange(dim)).ravel()
             self.counters.direct_solves += 1
-            return _direct(self.space, blocks, closed_points, closed, r_kin, r_ctl)
+            return self._direct(blocks, closed_points, r_kin, r_ctl)
         # Rows of open points may stay in the system: their tangent is zero, so their columns
         # are the identity and the equations stay exact. Solving on the points the
         # preconditioner was built for keeps it usable when points open.
@@ -112,32 +126,36 @@ class NewtonLinearSolver:
             working = grown if grown.size <= 1.25 * closed_points.size else closed_points
         else:
             working = reference
-        closed = (working[:, None] * dim + np.arange(dim)).ravel()
+        closed = _rows(working, dim)
         space = self.space
         closed_blocks = blocks[working]
-        W_cc = self._closed_compliance(closed)
+        dtype = np.float32 if self.settings.single_precision else np.float64
+        W_cc = self._closed_compliance(closed, dtype)
         E_c = space.E[closed]
-
-        def apply_tangent(x):
-            return np.einsum("pij,pj->pi", closed_blocks, x.reshape(-1, dim)).ravel()
+        n_c = closed.size
+        buffer = np.empty(n_c + space.n_control)
 
         def matvec(x):
-            x_c, x_q = x[:closed.size], x[closed.size:]
-            tangent_x = apply_tangent(x_c)
-            top = x_c + W_cc @ tangent_x.astype(W_cc.dtype) + E_c @ x_q
-            return np.concatenate([top, self._control_scale * (space.Sq @ x_q - E_c.T @ tangent_x)])
+            x_c, x_q = x[:n_c], x[n_c:]
+            tangent_x = _apply_blocks(closed_blocks, x_c)
+            top = buffer[:n_c]
+            np.add(x_c, W_cc @ tangent_x.astype(dtype, copy=False), out=top)
+            if x_q.size:
+                top += E_c @ x_q
+                buffer[n_c:] = self._control_scale * (space.Sq @ x_q - E_c.T @ tangent_x)
+            return buffer.copy()
 
         def krylov():
             rhs = np.concatenate([-r_kin[closed], -self._control_scale * r_ctl])
-            return _gmres(matvec, self._precondition, rhs, self.settings.relative_tolerance,
-                          self.settings.max_iterations)
+            tolerance = self.settings.final_tolerance if final else self.settings.relative_tolerance
+            return _gmres(matvec, self._precondition, rhs, tolerance, self.settings.max_iterations)
 
         if refactor:
             self._refactor(working, closed_blocks, W_cc, E_c)
         solution, iterations = krylov()
         if solution is not None and iterations > self.settings.fresh_iterations:
             aged = iterations - self.settings.fresh_iterations
-            self._lost_work += aged * _krylov_iteration_flops(closed.size + space.n_control)
+            self._lost_work += aged * _krylov_iteration_flops(n_c + space.n_control)
         if solution is None:
             self._refactor(working, closed_blocks, W_cc, E_c)
             solution, more = krylov()
@@ -147,63 +165,135 @@ class NewtonLinearSolver:
         self._stale = self._lost_work > self._rebuild_work
         self.counters.solves += 1
         self.counters.krylov_iterations += iterations
-        delta_q = solution[closed.size:]
+        return self._with_open_rows(blocks, working, solution[:n_c], solution[n_c:], r_kin)
+
+    def _with_open_rows(self, blocks, closed_points, delta_closed, delta_q, r_kin):
+        """The full Δg from its closed rows: open rows follow by one product with W."""
+        n, dim, _ = blocks.shape
+        closed = _rows(closed_points, dim)
         delta_g = np.empty(n * dim)
-        delta_g[closed] = solution[:closed.size]
-        if closed.size < n * dim:
-            open_rows = np.setdiff1d(np.arange(n * dim), closed)
-            contact_force = np.zeros(n * dim)
-            contact_force[closed] = apply_tangent(solution[:closed.size])
-            delta_g[open_rows] = (-r_kin[open_rows] - (space.W @ contact_force)[open_rows]
-                                  - space.E[open_rows] @ delta_q)
+        delta_g[closed] = delta_closed
+        if closed.size == n * dim:
+            return delta_g, delta_q
+        is_open = np.ones(n * dim, dtype=bool)
+        is_open[closed] = False
+        open_rows = np.flatnonzero(is_open)
+        contact_force = _apply_blocks(blocks[closed_points], delta_closed)
+        W = self.space.W
+        # W is symmetric: (W·f)[open] = f_c·W[closed, open]; gather the smaller row set.
+        if open_rows.size <= closed.size:
+            coupling = W[open_rows][:, closed] @ contact_force
+        else:
+            coupling = contact_force @ W[closed][:, open_rows]
+        delta_g[open_rows] = -r_kin[open_rows] - coupling - self.space.E[open_rows] @ delta_q
         return delta_g, delta_q
 
-    def _closed_compliance(self, closed: np.ndarray) -> np.ndarray:
-        """W on the closed rows, in the Krylov working precision; cached while they stay closed."""
-        if self._W_closed is None or not np.array_equal(self._W_closed_rows, closed):
+    def _direct(self, blocks, closed_points, r_kin, r_ctl):
+        """Exact solve: float64 LU of the bordered closed Jacobian of this iteration."""
+        n, dim, _ = blocks.shape
+        closed = _rows(closed_points, dim)
+        E_c = self.space.E[closed]
+        W_cc = self._closed_compliance(closed, np.float64)
+        matrix, scale = _bordered(W_cc, blocks[closed_points], E_c, self.space.Sq, np.float64)
+        rhs = np.concatenate([-r_kin[closed], -scale * r_ctl])
+        if rhs.size:
+            lu, pivots, info = _getrf(matrix)
+            if info > 0:
+                raise np.linalg.LinAlgError("singular Newton system")
+            solution, _ = _getrs(lu, pivots, rhs)
+        else:
+            solution = rhs
+        return self._with_open_rows(blocks, closed_points, solution[:closed.size],
+                                    solution[closed.size:], r_kin)
+
+    def _closed_compliance(self, closed: np.ndarray, dtype) -> np.ndarray:
+        """W on the closed rows, in ``dtype``; cached while they stay closed."""
+        key = np.dtype(dtype).char
+        cached = self._compliance.get(key)
+        if cached is None or not np.array_equal(cached[0], closed):
             W = self.space.W
-            dtype = np.float32 if self.settings.single_precision else np.float64
+            self._compliance.pop(key, None)  # free the old copy before making the new one
             all_closed = closed.size == W.shape[0]
-            self._W_closed = None  # free the old copy before making the new one
-            self._W_closed = (W if all_closed else W[np.ix_(closed, closed)]).astype(dtype, copy=False)
-            self._W_closed_rows = closed
-        return self._W_closed
+            block = W if all_closed else W[closed][:, closed]
+            self._compliance[key] = cached = (closed, block.astype(dtype, copy=False))
+        return cached[1]
 
     def _refactor(self, closed_points, closed_blocks, W_cc, E_c) -> None:
-        """Dense LU of the bordered closed Jacobian, scaled control rows, built in Fortran order."""
-        dtype = np.float32 if self.settings.single_precision else np.float64
-        n_c, m = W_cc.shape[0], self.space.n_control
-        dim = closed_blocks.shape[1]
-        matrix = np.empty((n_c + m, n_c + m), dtype=dtype, order="F")
-        # W·blockdiag(D) = (blockdiag(Dᵀ)·W)ᵀ since W is symmetric: the row-block product is
-        # contiguous, and its transpose is the Fortran-ordered array LAPACK factorises in place.
-        transposed = matrix.T
-        np.matmul(closed_blocks.transpose(0, 2, 1).astype(dtype),
-                  W_cc.astype(dtype, copy=False).reshape(-1, dim, n_c),
-                  out=transposed[:n_c, :n_c].reshape(-1, dim, n_c))
-        transposed[np.diag_indices(n_c)] += 1.0
-        # Eᵀ·blockdiag(D) = (blockdiag(Dᵀ)·E)ᵀ
-        tangent_E = np.einsum("pji,pjm->pim", closed_blocks, E_c.reshape(-1, dim, m)).reshape(n_c, m)
-        # Control rows are forces (N). S_q alone may vanish (a body floating until it touches),
-        # so they are divided by the stiffness the closed contacts give each control DOF,
-        # diag(Eᵀ·A·D·E) + |diag(S_q)|: then they read as mm like the kinematic rows. The floor
-        # keeps a DOF that no contact holds yet (tangential, before any pressure) well scaled.
-        stiffness = np.abs(np.einsum("rm,rm->m", E_c, tangent_E)) + np.abs(np.diag(self.space.Sq))
-        floor = 1e-3 * stiffness.max(initial=0.0)
-        self._control_scale = 1.0 / (np.maximum(stiffness, floor) if floor > 0.0 else np.ones(m))
-        matrix[:n_c, n_c:] = E_c
-        matrix[n_c:, :n_c] = -(self._control_scale[:, None] * tangent_E.T)
-        matrix[n_c:, n_c:] = self._control_scale[:, None] * self.space.Sq
-        self._factor = la.lu_factor(matrix, overwrite_a=True, check_finite=False)
+        """LU of the bordered closed Jacobian in the Krylov working precision."""
+        matrix, self._control_scale = _bordered(W_cc, closed_blocks, E_c, self.space.Sq, W_cc.dtype)
+        lu, pivots, info = _getrf(matrix)
+        if info > 0:
+            raise np.linalg.LinAlgError("singular preconditioner")
+        self._factor = (lu, pivots, _getrs_for(lu.dtype))
         self._closed_key = closed_points
         self._stale = False
-        self._rebuild_work = _rebuild_flops(n_c + m)
+        self._rebuild_work = _rebuild_flops(matrix.shape[0])
         self._lost_work = 0.0
         self.counters.factorisations += 1
 
     def _precondition(self, vector: np.ndarray) -> np.ndarray:
-        lu, pivots = self._factor
-        return la.lu_solve((lu, pivots), vector.astype(lu.dtype), check_finite=False).astype(float)
+        lu, pivots, getrs = self._factor
+        solution, _ = getrs(lu, pivots, vector.astype(lu.dtype))
+        return solution.astype(float, copy=False)
+
+
+def _rows(points: np.ndarray, dim: int) -> np.ndarray:
+    """Rows (normal, tangents) of ``points`` in the contact kinematics."""
+    return (points[:, None] * dim + np.arange(dim)).ravel()
+
+
+def _apply_blocks(blocks: np.ndarray, vector: np.ndarray) -> np.ndarray:
+    """blockdiag(blocks)·vector for per-point (dim, dim) blocks."""
+    n, dim, _ = blocks.shape
+    return np.matmul(blocks, vector.reshape(n, dim, 1)).reshape(-1)
+
+
+def _bordered(W_cc, closed_blocks, E_c, Sq, dtype) -> tuple[np.ndarray, np.ndarray]:
+    """The bordered closed Jacobian in Fortran order, and the scale of its control rows.
+
+        [[I + W_cc·A·D,   E_c ],
+         [−s·E_cᵀ·A·D,  s·S_q]]
+
+    Control rows are forces (N). S_q alone may vanish (a body floating until it touches),
+    so they are divided by the stiffness the closed contacts give each control DOF,
+    diag(Eᵀ·A·D·E) + |diag(S_q)|: then they read as mm like the kinematic rows. The floor
+    keeps a DOF that no contact holds yet (tangential, before any pressure) well scaled.
+    """
+    n_c, m = W_cc.shape[0], Sq.shape[0]
+    dim = closed_blocks.shape[1]
+    matrix = np.empty((n_c + m, n_c + m), dtype=dtype, order="F")
+    # W·blockdiag(D) = (blockdiag(Dᵀ)·W)ᵀ since W is symmetric: the row-block product is
+    # contiguous, and its transpose is the Fortran-ordered array LAPACK factorises in place.
+    transposed = matrix.T
+    if n_c:
+        np.matmul(closed_blocks.transpose(0, 2, 1).astype(dtype),
+                  W_cc.astype(dtype, copy=False).reshape(-1, dim, n_c),
+                  out=transposed[:n_c, :n_c].reshape(-1, dim, n_c))
+        transposed[np.diag_indices(n_c)] += 1.0
+    # Eᵀ·blockdiag(D) = (blockdiag(Dᵀ)·E)ᵀ
+    tangent_E = np.einsum("pji,pjm->pim", closed_blocks, E_c.reshape(-1, dim, m)).reshape(n_c, m)
+    stiffness = np.abs(np.einsum("rm,rm->m", E_c, tangent_E)) + np.abs(np.diag(Sq))
+    floor = 1e-3 * stiffness.max(initial=0.0)
+    scale = 1.0 / (np.maximum(stiffness, floor) if floor > 0.0 else np.ones(m))
+    matrix[:n_c, n_c:] = E_c
+    matrix[n_c:, :n_c] = -(scale[:, None] * tangent_E.T)
+    matrix[n_c:, n_c:] = scale[:, None] * Sq
+    return matrix, scale
+
+
+def _getrf(matrix: np.ndarray):
+    """LAPACK LU in place (no checks, no copies): (lu, pivots, info)."""
+    getrf, = get_lapack_funcs(("getrf",), (matrix,))
+    return getrf(matrix, overwrite_a=True)
+
+
+def _getrs_for(dtype):
+    getrs, = get_lapack_funcs(("getrs",), dtype=dtype)
+    return getrs
+
+
+def _getrs(lu, pivots, rhs):
+    return _getrs_for(lu.dtype)(lu, pivots, rhs)
 
 
 def _krylov_iteration_flops(size: int) -> float:
@@ -255,62 +345,3 @@ def _gmres(matvec, precondition, rhs: np.ndarray, tolerance: float, max_iteratio
             coefficients = la.solve_triangular(hessenberg[:k, :k], residual[:k], check_finite=False)
             return directions[:k].T @ coefficients, k
     return None, max_iterations
-
-
-def _direct(space: ContactSpace, blocks, closed_points, closed, r_kin, r_ctl):
-    """Dense LU of the closed block every iteration, control DOFs by a small Schur complement."""
-    n, dim, _ = blocks.shape
-    open_rows = np.setdiff1d(np.arange(n * dim), closed)
-    W, E = space.W, space.E
-    closed_blocks = blocks[closed_points]
-
-    def apply_tangent(vectors):  # A·D on closed rows; vectors (n_closed·dim, k)
-        k = vectors.shape[1]
-        stacked = vectors.reshape(closed_points.size, dim, k)
-        return np.einsum("pij,pjk->pik", closed_blocks, stacked).reshape(-1, k)
-
-    m = E.shape[1]
-    rhs = np.column_stack([-r_kin, -E]) if m else -r_kin[:, None]
-    solution = np.zeros((n * dim, 1 + m))
-    if closed.size:
-        W_cc = W[np.ix_(closed, closed)]
-        matrix = np.empty((closed.size, closed.size), order="F")
-        np.matmul(closed_blocks.transpose(0, 2, 1), W_cc.reshape(-1, dim, closed.size),
-                  out=matrix.T.reshape(-1, dim, closed.size))
-        matrix[np.diag_indices_from(matrix)] += 1.0
-        factor = la.lu_factor(matrix, check_finite=False, overwrite_a=True)
-        solution[closed] = la.lu_solve(factor, rhs[closed], check_finite=False)
-    if open_rows.size:
-        coupling = W[np.ix_(open_rows, closed)] @ apply_tangent(solution[closed]) if closed.size else 0.0
-        solution[open_rows] = rhs[open_rows] - coupling
-    if not m:
-        return solution[:, 0], np.zeros(0)
-    tangent_times = np.zeros((n * dim, 1 + m))
-    if closed.size:
-        tangent_times[closed] = apply_tangent(solution[closed])
-    schur = space.Sq - E.T @ tangent_times[:, 1:]
-    delta_q = np.linalg.solve(schur, -r_ctl + E.T @ tangent_times[:, 0])
-    return solution[:, 0] + solution[:, 1:] @ delta_q, delta_q
-
-
-_solvers: "weakref.WeakKeyDictionary[ContactSpace, NewtonLinearSolver]" = weakref.WeakKeyDictionary()
-
-
-def solver_for(space: ContactSpace) -> NewtonLinearSolver:
-    """The linear solver attached to ``space`` (created on first use, freed with the space)."""
-    solver = _solvers.get(space)
-    if solver is None:
-        solver = _solvers[space] = NewtonLinearSolver(space)
-    return solver
-
-
-def attach(space: ContactSpace, settings: KrylovSettings) -> NewtonLinearSolver:
-    """Use ``settings`` for every Newton solve on ``space`` from now on; returns the new solver."""
-    solver = _solvers[space] = NewtonLinearSolver(space, settings)
-    return solver
-
-
-def solve_newton_system(space: ContactSpace, blocks: np.ndarray, r_kin: np.ndarray,
-                        r_ctl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Newton correction (Δg mm, Δq mm) for residuals r_kin (mm) and r_ctl (N)."""
-    return solver_for(space).solve(blocks, r_kin, r_ctl)

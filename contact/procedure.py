@@ -352,7 +352,8 @@ class _Run:
         """Pressure per mm of gap of each point alone (N/mm³): the penalty kn in series with the
         bodies' own compliance there, 1/(1/kn + W_ii·A_i) (W's normal diagonal, mm/N)."""
         if self._local_stiffness is None:
-            space, dim = self.solver.space, self.solver.dim
+            space = self.solver.space
+            dim = space.n_rows // self.solver.n_points
             compliance = np.diagonal(space.W)[0::dim] * self.solver.area
             self._local_stiffness = 1.0 / (1.0 / np.asarray(self.solver.law.normal_stiffness) + compliance)
         return self._local_stiffness

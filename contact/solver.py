@@ -10,14 +10,14 @@ in sub-steps. History variables advance only from converged sub-steps.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from contact.law import (ContactLaw, ContactState, Response, Status, advance, evaluate,
                          wear_increment)
-from contact import linear
-from contact.linear import solve_newton_system, tangent_blocks
+from contact.linear import KrylovSettings, NewtonLinearSolver, tangent_blocks
 from contact.structure import ContactSpace
 
 
@@ -37,6 +37,23 @@ class NewtonSettings:
         force scale.
     wear_cap: largest wear depth increment (mm) one sub-step may add (explicit wear
         integration); larger increments are cut back.
+    linear: how the Newton corrections are solved (:class:`contact.linear.KrylovSettings`).
+    line_search_window: a sub-step whose Newton iteration fails with the monotone
+        backtracking line search is tried again, before any cutback, with a non-monotone one
+        that accepts a step when it lowers the largest merit of this many last iterates (1:
+        no second try). With a stiff elastic stick (γ_crit of 0.001 µm) a full step moves
+        whole rings of points between stick and slip at once and raises the merit for an
+        iteration or two before it falls quadratically; the monotone search cuts those steps
+        to slivers and Newton crawls a ring per iteration (150 iterations for a
+        sphere-on-flat step). When the window passes without the merit halving (points
+        cycling between stick and slip), steps stop just past the first status change until
+        it does. The monotone search comes first because elsewhere (the counterweight's wear
+        phase) the non-monotone one can reach another of the non-unique frictional
+        equilibria, from which explicit wear then runs away.
+    blas_threads: BLAS threads inside an increment. One: the contact matrices are small
+        enough (a 4,500-row LU in 0.8 s) that a second thread gains little on two cores and
+        loses much when they are shared (tiny products spin-wait for a busy core), and the
+        results then do not depend on the machine's thread settings.
     """
 
     max_iterations: int = 30
@@ -44,6 +61,9 @@ class NewtonSettings:
     displacement_tolerance: float = 1e-10
     force_tolerance: float = 1e-9
     wear_cap: float = np.inf
+    linear: KrylovSettings = field(default_factory=KrylovSettings)
+    line_search_window: int = 5
+    blas_threads: int = 1
 
 
 @dataclass(frozen=True)
@@ -94,12 +114,19 @@ def _rigid_modes(space: ContactSpace, stiffness_scale: float) -> np.ndarray:
 
 
 class ContactSolver:
-    """Owns the Newton iteration for one :class:`ContactSpace` and one :class:`ContactLaw`."""
+    """Owns the Newton iteration for one :class:`ContactSpace` and one :class:`ContactLaw`.
 
-    def __init__(self, space: ContactSpace, law: ContactLaw, settings: NewtonSettings = NewtonSettings()):
+    linear: the solver of the Newton corrections; it keeps factorisations between calls, so
+    it belongs to this solver alone. Default: one built from ``settings.linear``.
+    """
+
+    def __init__(self, space: ContactSpace, law: ContactLaw, settings: NewtonSettings = NewtonSettings(),
+                 linear: NewtonLinearSolver | None = None):
         self.space = space
         self.law = law
         self.settings = settings
+        self.linear = linear if linear is not None else NewtonLinearSolver(space, settings.linear)
+        self._threads = ThreadpoolController()
         structure = space.structure
         self.dim = structure.dim
         self.n_points = structure.n_points
@@ -118,7 +145,7 @@ class ContactSolver:
     def forget_cached_factorisations(self) -> None:
         """Drop the factorisations the linear solver keeps across increments (a checkpoint
         boundary: a resumed run then starts from the same solver state as an uninterrupted one)."""
-        linear._solvers.pop(self.space, None)
+        self.linear = NewtonLinearSolver(self.space, self.linear.settings)
         self._last_compliance = None
 
     def initial_equilibrium(self) -> Equilibrium:
@@ -194,7 +221,28 @@ class ContactSolver:
             kn = np.broadcast_to(self.law.normal_stiffness, penetration.shape)
             penalty = kn[nearest] * self.area[nearest]
             blocks[nearest] = penalty[:, None, None] * np.eye(self.dim)
-        return (*solve_newton_system(self.space, blocks, r_kin, r_ctl), searching)
+        # within a few decades of the tolerance, the next step should be the last
+        final = np.max(np.abs(r_kin), initial=0.0) <= 1e3 * self.settings.displacement_tolerance
+        return (*self.linear.solve(blocks, r_kin, r_ctl, final), searching)
+
+    def _first_kink(self, g, delta_g, state: ContactState, reference) -> float:
+        """Fraction of the step g → g + Δg at which the first point opens, closes or crosses
+        the stick limit |γ_tr| = γ_crit (just past it), or 1 if none does."""
+        penetration, slip = self._split(g, reference)
+        penetration = penetration - state.gap
+        change = delta_g.reshape(self.n_points, self.dim)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            contact = np.where(penetration * (penetration + change[:, 0]) < 0.0,
+                               -penetration / change[:, 0], np.inf)
+            a = state.elastic_slip + slip
+            b = change[:, 1:]
+            bb, ab = np.einsum("ij,ij->i", b, b), np.einsum("ij,ij->i", a, b)
+            cc = np.einsum("ij,ij->i", a, a) - np.broadcast_to(self.law.critical_slip, penetration.shape) ** 2
+            root = np.sqrt(ab * ab - bb * cc)
+            candidates = np.stack([(-ab - root) / bb, (-ab + root) / bb])
+            candidates = np.where((candidates > 0.0) & (penetration > 0.0), candidates, np.inf)
+        first = float(min(contact.min(initial=np.inf), np.nanmin(candidates, initial=np.inf)))
+        return min(1.0, 1.001 * first) if first > 1e-6 else 1.0
 
     def _open_step(self, r_kin, r_ctl):
         """Exact Newton step with every point open: S_q·Δq = −r_ctl off the rigid modes."""
@@ -205,7 +253,17 @@ class ContactSolver:
 
     def _solve_to(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
                   stats: IncrementStats) -> tuple[Equilibrium, Response] | None:
-        """Newton from ``start`` to the load ``amplitudes``; None if it does not converge."""
+        """Newton from ``start`` to the load ``amplitudes``; None if it does not converge.
+
+        A monotone line search first; if that fails, once more with the non-monotone one
+        (``settings.line_search_window``) before the caller cuts the step back."""
+        solved = self._newton(start, state, amplitudes, stats, window=1)
+        if solved is None and self.settings.line_search_window > 1:
+            solved = self._newton(start, state, amplitudes, stats, window=self.settings.line_search_window)
+        return solved
+
+    def _newton(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
+                stats: IncrementStats, window: int) -> tuple[Equilibrium, Response] | None:
         g_f, f_q = self.space.driving(amplitudes)
         force_scale = max(1.0, float(np.max(np.abs(f_q), initial=0.0)),
                           float(np.max(np.abs(start.forces), initial=0.0)))
@@ -228,6 +286,7 @@ class ContactSolver:
             if best is None or candidate_merit < best[0]:
                 best = (candidate_merit, g, candidate)
         merit, g, (r_kin, r_ctl, response, forces) = best
+        recent, history, stalled = [merit], [merit], False  # merits for the line search
         for iteration in range(1, self.settings.max_iterations + 1):
             try:
                 delta_g, delta_q, searching = self._newton_step(response, g, state, r_kin, r_ctl, loaded)
@@ -235,13 +294,16 @@ class ContactSolver:
                 # A singular tangent (e.g. every point sliding under force control) or an
                 # iterative solve that gives up: this attempt fails and is cut back.
                 break
-            step = 1.0
+            # Stalled (points cycling between stick and slip): step only to the first point
+            # whose status the step changes, just past it. The linear model is right up to
+            # there, so the merit falls; the next linearisation sees the new status.
+            step = self._first_kink(g, delta_g, state, reference) if stalled else 1.0
             # A contact-search step (no point closed yet) is taken whole: the merit of the
             # open configuration is no guide to how far the body has to move.
             while not searching:
                 trial = self._residual(g + step * delta_g, q + step * delta_q, state, reference, g_f, f_q)
                 trial_merit = self._merit(trial[0], trial[1], force_scale)
-                if trial_merit <= (1.0 - 1e-4 * step) * merit or step < 1.0 / 64:
+                if trial_merit <= (1.0 - 1e-4 * step) * max(recent) or step < 1.0 / 64:
                     break
                 step *= 0.5
             if searching:
@@ -250,6 +312,12 @@ class ContactSolver:
             g, q = g + step * delta_g, q + step * delta_q
             r_kin, r_ctl, response, forces = trial
             merit = trial_merit
+            recent = (recent + [merit])[-window:]
+            history.append(merit)
+            # no progress over the window (points cycling): monotone again, kink-limited steps
+            stalled = window > 1 and len(history) > window and merit > 0.5 * min(history[:-window])
+            if stalled:
+                recent = [merit]
             if not np.all(np.isfinite(g)) or not np.all(np.isfinite(q)):
                 break
             floating = loaded and not np.any(response.dpressure_dh > 0.0)
@@ -294,7 +362,8 @@ class ContactSolver:
         point status and the iteration counters. Raises :class:`ConvergenceError` when a
         sub-step of that smallest size still fails.
         """
-        return advance_with_cutbacks(self, start, state, amplitudes, effects)
+        with self._threads.limit(limits=self.settings.blas_threads, user_api="blas"):
+            return advance_with_cutbacks(self, start, state, amplitudes, effects)
 
 
 def advance_with_cutbacks(solver, start, state: ContactState, amplitudes: np.ndarray, effects: Effects):

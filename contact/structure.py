@@ -23,9 +23,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as la
+from scipy.linalg import lapack
 import scipy.sparse as sp
 
 from reduction.errors import InputError
+from reduction.threads import single_threaded_blas
 
 
 @dataclass(frozen=True)
@@ -84,49 +86,88 @@ def _diagonal_blocks(matrix: np.ndarray, index: np.ndarray) -> list[np.ndarray]:
 
 
 class _BlockFactor:
-    """LU factors of the block-diagonal contact-DOF stiffness, one per body block."""
+    """Inverses of the block-diagonal contact-DOF stiffness, one per body block.
+
+    Each block is symmetric positive definite when its body is supported (held by fixed,
+    prescribed or control DOFs): its Cholesky factor and from it the inverse (LAPACK potrf,
+    potri: n³ flops in all) are formed in place. The contact operator is sparse, so the
+    congruence G·K⁻¹·Gᵀ then costs a few products per nonzero of G instead of the 2n³ of
+    solving for every column, and a solve is one symmetric product with the inverse.
+    """
 
     def __init__(self, stiffness: np.ndarray, index: np.ndarray):
         self.index = index
         position = np.empty(stiffness.shape[0], dtype=int)
         position[index] = np.arange(index.size)
         self.blocks = [position[block] for block in _diagonal_blocks(stiffness, index)]
-        self.factors = []
-        for block in self.blocks:
-            global_block = index[block]
-            factor = la.lu_factor(stiffness[np.ix_(global_block, global_block)], check_finite=False,
-                                  overwrite_a=True)
-            pivots = np.abs(np.diag(factor[0]))
-            if pivots.min() <= 1e-12 * pivots.max():
-                raise InputError("a body is not supported: its stiffness is singular with the "
-                                 "contact surfaces free and its control points held; fix a "
-                                 "boundary, prescribe a motion or add a control point")
-            self.factors.append(factor)
+        self.inverses = [_spd_inverse(stiffness[np.ix_(index[block], index[block])]) for block in self.blocks]
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         out = np.empty_like(rhs, dtype=float)
-        for block, factor in zip(self.blocks, self.factors):
-            out[block] = la.lu_solve(factor, rhs[block], check_finite=False)
+        for block, inverse in zip(self.blocks, self.inverses):
+            out[block] = inverse @ rhs[block]
         return out
 
     def congruence(self, operator: sp.csr_matrix) -> np.ndarray:
         """operator·K⁻¹·operatorᵀ, one body block at a time (no dense global operator)."""
         result = np.zeros((operator.shape[0], operator.shape[0]))
         columns = operator.tocsc()
-        for block, factor in zip(self.blocks, self.factors):
+        for block, inverse in zip(self.blocks, self.inverses):
             part = columns[:, block]
             touched = np.unique(part.tocoo().row)
             if touched.size == 0:
                 continue
-            local = part[touched].toarray().T  # (block, touched rows)
-            result[np.ix_(touched, touched)] += part[touched] @ la.lu_solve(factor, local, check_finite=False)
+            rows = part[touched].tocsr()
+            # G·(G·K⁻¹)ᵀ = G·K⁻¹·Gᵀ (K⁻¹ symmetric), both products sparse times dense;
+            # symmetrised, as the round-off of the two sides is not
+            result[np.ix_(touched, touched)] += _symmetric(np.asarray(rows @ np.asarray(rows @ inverse).T))
         return result
+
+
+def _spd_inverse(matrix: np.ndarray) -> np.ndarray:
+    """Inverse of a symmetric positive definite block, in place (C order: LAPACK sees Aᵀ = A)."""
+    matrix = np.ascontiguousarray(matrix)
+    # matrix.T is the Fortran-ordered view LAPACK works on in place; its upper triangle is
+    # the lower one of ``matrix``
+    factor, info = lapack.dpotrf(matrix.T, lower=0, overwrite_a=1, clean=0)
+    pivots = np.diag(factor) ** 2 if info == 0 else np.zeros(1)
+    if info != 0 or pivots.min() <= 1e-12 * pivots.max():
+        raise InputError("a body is not supported: its stiffness is singular with the "
+                         "contact surfaces free and its control points held; fix a "
+                         "boundary, prescribe a motion or add a control point")
+    inverse, info = lapack.dpotri(factor, lower=0, overwrite_c=1)
+    if not np.shares_memory(inverse, matrix):
+        matrix = np.ascontiguousarray(inverse.T)
+    return _mirror(matrix)
+
+
+def _mirror(matrix: np.ndarray, chunk: int = 1024) -> np.ndarray:
+    """Fill the strict upper triangle of a square array from its lower triangle (the one a
+    Fortran-ordered 'upper' LAPACK result holds when read in C order), chunk by chunk."""
+    n = matrix.shape[0]
+    for start in range(0, n, chunk):
+        stop = min(start + chunk, n)
+        upper = np.triu_indices(stop - start, 1)
+        tile = matrix[start:stop, start:stop]
+        tile[upper] = tile.T[upper]
+        matrix[start:stop, stop:] = matrix[stop:, start:stop].T
+    return matrix
+
+
+def _symmetric(matrix: np.ndarray) -> np.ndarray:
+    matrix += matrix.T.copy()
+    matrix *= 0.5
+    return matrix
 
 
 class ContactSpace:
     """Exact elimination of a :class:`Structure` onto contact kinematics and control DOFs."""
 
     def __init__(self, structure: Structure):
+        with single_threaded_blas():
+            self._eliminate(structure)
+
+    def _eliminate(self, structure: Structure) -> None:
         self.structure = structure
         n = structure.n_dofs
         G = structure.contact_operator.tocsr()
@@ -144,8 +185,7 @@ class ContactSpace:
         Gc = G[:, c]
         self.Gc = Gc.tocsr()
         self.W = self._Kcc.congruence(self.Gc)
-        self.W = np.ascontiguousarray(0.5 * (self.W + self.W.T))
-        compliance_Kcq = self._Kcc.solve(self._Kcq)
+        compliance_Kcq = self.compliance_Kcq = self._Kcc.solve(self._Kcq)
         self.E = Gc @ compliance_Kcq
         self.Sq = K[np.ix_(q, q)] - self._Kcq.T @ compliance_Kcq
         self.control_stiffness = np.zeros((q.size, q.size))  # locked bolts add to it
@@ -187,6 +227,10 @@ class ContactSpace:
     def driving(self, amplitudes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """g_f (mm) and f_q (N) for a vector of pattern amplitudes."""
         return self.pattern_gf @ amplitudes, self.pattern_fq @ amplitudes
+
+    def solve_contact_block(self, rhs: np.ndarray) -> np.ndarray:
+        """K_cc⁻¹·rhs (mm) for forces ``rhs`` (N) on the contact DOFs, body block by body block."""
+        return self._Kcc.solve(rhs)
 
     def displacements(self, control: np.ndarray, forces: np.ndarray, amplitudes: np.ndarray) -> np.ndarray:
         """All retained displacements (n,) mm from control DOFs q and contact forces λ (N)."""

@@ -8,7 +8,6 @@ Modules and sub-packages, in the order data flows through them:
     coupling       the [coupling] table: multibody stage, CW inertia patterns, cycle program
     build          Scene -> Model: meshes, bodies, condensed assembly, law, program, procedure
     stages         the stage cache (content hash + code fingerprint)
-    threads        one BLAS thread per process: the same scene gives the same bits
     parallel       independent cases on dask (local cluster, a scheduler, or in process)
     jobs/          run, limit (scan: every change of verdict), margins, sweep, demo, validate
     studies/       accuracy versus cost (accuracy, knobs, accuracy_report), constant vs variable COF,

@@ -18,4 +18,5 @@ Modules, in the order data flows through them:
     exudyn_bridge  floating-frame modes and ObjectFFRFreducedOrder for exudyn
     report         accuracy against the full model, records and error-vs-modes plot
     factorization, pardiso   sparse SPD solvers (MKL PARDISO, CHOLMOD, SuperLU)
+    threads                  one BLAS thread in the numerical steps: results independent of thread settings
 """

@@ -17,6 +17,7 @@ import scipy.sparse as sp
 from reduction.errors import InputError
 from reduction import pardiso
 from reduction.factorization import factorize, resolve_solver
+from reduction.threads import single_threaded_blas
 
 #: columns of K_ir solved per block; bounds the dense work array to n_interior x 512 floats.
 _RHS_BLOCK = 512
@@ -85,7 +86,15 @@ def condense(stiffness, retained, fixed=(), loads=None, *, solver: str = "auto")
     The interior block K_ii must be non-singular: retained plus fixed DOFs must stop every
     rigid-body motion of the interior. Otherwise InputError, raised here or, with PARDISO (whose
     Schur complement is still right then), at the first interior solve (loads, ``expand``).
+    BLAS and PARDISO run on one thread (:mod:`reduction.threads`): the result does not depend
+    on the machine's thread settings.
     """
+    with single_threaded_blas():
+        return _condense(stiffness, retained, fixed, loads, solver)
+
+
+def _condense(stiffness, retained, fixed, loads, solver: str) -> Condensation:
+    """:func:`condense` without the thread limit."""
     matrix = sp.csr_matrix(stiffness)
     n_dofs = matrix.shape[0]
     if matrix.shape != (n_dofs, n_dofs):
@@ -122,9 +131,12 @@ def condense(stiffness, retained, fixed=(), loads=None, *, solver: str = "auto")
             )
         else:
             schur = _schur_complement(matrix[retained][:, retained].toarray(), k_ir, solve)
-        for name, vector in loads.items():
-            responses[name] = solve(vector[interior])
-            condensed_loads[name] -= k_ir.T @ responses[name]
+        if loads:
+            responses = dict(zip(loads, solve(np.column_stack([v[interior] for v in loads.values()])).T))
+            for name in loads:
+                condensed_loads[name] -= k_ir.T @ responses[name]
+            if solver == "pardiso":
+                solve.release()
     return Condensation(
         retained=retained,
         stiffness=0.5 * (schur + schur.T),
@@ -139,19 +151,32 @@ def condense(stiffness, retained, fixed=(), loads=None, *, solver: str = "auto")
     )
 
 
-def lazy_interior_solver(k_ii: sp.csr_matrix, solver: str, *, eager: bool | None = None
-                         ) -> Callable[[np.ndarray], np.ndarray]:
+class InteriorSolver:
     """K_ii^-1 b, factorising on first use: a PARDISO Schur complement alone does not need it.
 
-    eager (default: unless PARDISO) factorises at once, so a singular K_ii is reported at once.
+    :meth:`release` frees the factor (a 3D body of 400k DOFs holds gigabytes in it); the next
+    solve factorises again. Condensation releases it once the loads are condensed, so that a
+    run does not carry every body's factor for the few field expansions at its end.
     """
-    factors = []
 
-    def solve(rhs: np.ndarray) -> np.ndarray:
-        if not factors:
-            factors.append(factorize(k_ii, solver=solver, label="interior stiffness K_ii"))
-        return factors[0].solve(rhs)
+    def __init__(self, k_ii: sp.csr_matrix, solver: str):
+        self.k_ii, self.solver = k_ii, solver
+        self._factor = None
 
+    def __call__(self, rhs: np.ndarray) -> np.ndarray:
+        with single_threaded_blas():
+            if self._factor is None:
+                self._factor = factorize(self.k_ii, solver=self.solver, label="interior stiffness K_ii")
+            return self._factor.solve(rhs)
+
+    def release(self) -> None:
+        self._factor = None
+
+
+def lazy_interior_solver(k_ii: sp.csr_matrix, solver: str, *, eager: bool | None = None) -> InteriorSolver:
+    """An :class:`InteriorSolver` for K_ii. eager (default: unless PARDISO) factorises at once,
+    so a singular K_ii is reported at once."""
+    solve = InteriorSolver(k_ii, solver)
     if eager is None:
         eager = solver != "pardiso"
     if eager:

@@ -40,6 +40,9 @@ class ElasticBody:
     stiffness: (n_dofs, n_dofs) CSR, N/mm. mass: CSR in t, or None when no density was given.
     node_dofs: (n_nodes, dim) int, global DOF of node k, component j. Nodes are the mesh
     vertices followed, for quadratic elements, by one node per mesh edge (mid-edge).
+    basis: the DOF layout (``doflocs``, ``nodal_dofs``, ``N``); built by
+    :func:`assemble_elastic_body` its quadrature data cover one element only (memory): to
+    assemble a form, build a basis of the mesh.
     """
 
     mesh: skfem.Mesh
@@ -135,21 +138,41 @@ def _simplex_matrices(mesh: skfem.Mesh, node_dofs: np.ndarray, lam: np.ndarray, 
     return stiffness, mass
 
 
-def _vector_form_stiffness(basis: skfem.Basis, lam: np.ndarray, mu: np.ndarray) -> sp.csr_matrix:
-    """Isotropic elasticity on any vector basis: the strain of each local basis function is
-    computed once and all local pairs are formed by one einsum (scikit-fem's generic form
-    evaluates both strains for every pair, ~30x slower for hexahedra)."""
-    n_local = basis.Nbfun
-    strains = np.array([sym_grad(basis.basis[i][0]) for i in range(n_local)])  # (b, d, d, e, q)
-    dim = strains.shape[1]
-    trace_ = np.einsum("biieq->beq", strains)
-    stress = (2.0 * mu[None, None, None, :, None] * strains
-              + lam[None, None, None, :, None] * trace_[:, None, None] * np.eye(dim)[None, :, :, None, None])
-    local = np.einsum("aijeq,bijeq,eq->eab", strains, stress, basis.dx, optimize=True)
-    dofs = basis.element_dofs  # (b, e)
-    rows = np.broadcast_to(dofs.T[:, :, None], local.shape).ravel()
-    cols = np.broadcast_to(dofs.T[:, None, :], local.shape).ravel()
-    return sp.csr_matrix((local.ravel(), (rows, cols)), shape=(basis.N, basis.N))
+#: elements per block of the quad/hex assembly: bounds its work arrays (~60 kB per element
+#: for trilinear hexahedra) to about 0.25 GB whatever the mesh size.
+_VECTOR_BLOCK = 4096
+
+
+def _vector_form_matrices(mesh: skfem.Mesh, element: skfem.Element, intorder, lam: np.ndarray,
+                          mu: np.ndarray, rho: np.ndarray | None):
+    """Isotropic elasticity (and consistent mass) on any vector basis: the strain of each local
+    basis function is computed once and all local pairs are formed by one einsum (scikit-fem's
+    generic form evaluates both strains for every pair, ~30x slower for hexahedra). Blocks of
+    elements are assembled one after the other, each with a basis of its own, so that memory
+    stays bounded (a basis over all elements holds 18 kB per hexahedron)."""
+    n_elements = mesh.t.shape[1]
+    stiffness, mass = None, None
+    for start in range(0, n_elements, _VECTOR_BLOCK):
+        block = np.arange(start, min(start + _VECTOR_BLOCK, n_elements))
+        basis = skfem.Basis(mesh, element, intorder=intorder, elements=block)
+        strains = np.array([sym_grad(basis.basis[i][0]) for i in range(basis.Nbfun)])  # (b, d, d, e, q)
+        dim = strains.shape[1]
+        trace_ = np.einsum("biieq->beq", strains)
+        stress = (2.0 * mu[None, None, None, block, None] * strains
+                  + lam[None, None, None, block, None] * trace_[:, None, None] * np.eye(dim)[None, :, :, None, None])
+        parts = [np.einsum("aijeq,bijeq,eq->eab", strains, stress, basis.dx, optimize=True)]
+        if rho is not None:
+            values = np.array([np.asarray(basis.basis[i][0]) for i in range(basis.Nbfun)])  # (b, d, e, q)
+            parts.append(np.einsum("aieq,bieq,eq->eab", values, values, rho[block, None] * basis.dx,
+                                   optimize=True))
+        dofs = basis.element_dofs  # (b, e)
+        rows = np.broadcast_to(dofs.T[:, :, None], parts[0].shape).ravel()
+        cols = np.broadcast_to(dofs.T[:, None, :], parts[0].shape).ravel()
+        matrices = [sp.csr_matrix((local.ravel(), (rows, cols)), shape=(basis.N, basis.N)) for local in parts]
+        stiffness = matrices[0] if stiffness is None else stiffness + matrices[0]
+        if rho is not None:
+            mass = matrices[1] if mass is None else mass + matrices[1]
+    return stiffness, mass
 
 
 def assemble_elastic_body(
@@ -173,7 +196,9 @@ def assemble_elastic_body(
     # Trilinear hexahedra: 2×2×2 Gauss points, the standard full integration (scikit-fem's
     # default uses 64 points per element, 8x the cost for the same matrices on parallelepipeds).
     intorder = 3 if isinstance(element, skfem.ElementHex1) else None
-    basis = skfem.Basis(mesh, skfem.ElementVector(element), intorder=intorder)
+    # The body keeps the basis for its DOF layout (doflocs, nodal DOFs); quadrature data over
+    # every element would cost 18 kB per hexahedron, so it holds one element's only.
+    basis = skfem.Basis(mesh, skfem.ElementVector(element), intorder=intorder, elements=np.array([0]))
     n_elements = mesh.t.shape[1]
     young = _per_element(youngs_modulus, n_elements, "youngs_modulus")
     poisson = _per_element(poisson_ratio, n_elements, "poisson_ratio")
@@ -199,11 +224,7 @@ def assemble_elastic_body(
     if type(mesh) in (skfem.MeshTri1, skfem.MeshTet1) and not quadratic:
         stiffness, mass = _simplex_matrices(mesh, node_dofs, lam, mu, rho)
     else:
-        stiffness = _vector_form_stiffness(basis, np.asarray(lam, float).reshape(-1), np.asarray(mu, float).reshape(-1))
-
-        @skfem.BilinearForm
-        def kinetic_energy(u, v, w):
-            return w["rho"] * dot(u, v)
-
-        mass = None if rho is None else kinetic_energy.assemble(basis, rho=rho).tocsr()
+        stiffness, mass = _vector_form_matrices(
+            mesh, skfem.ElementVector(element), intorder, np.asarray(lam, float).reshape(-1),
+            np.asarray(mu, float).reshape(-1), None if rho is None else np.asarray(rho, float).reshape(n_elements, -1)[:, 0])
     return ElasticBody(mesh=mesh, basis=basis, dim=dim, stiffness=stiffness, mass=mass, node_dofs=node_dofs)

@@ -360,9 +360,6 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     handler = getattr(args, "func", None) or getattr(args, "handler")
     from contact.solver import ConvergenceError
-    from pipelines.threads import pin_blas_threads
-
-    pin_blas_threads()
 
     try:
         return handler(args)

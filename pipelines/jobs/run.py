@@ -77,6 +77,11 @@ def _solver(model: Model, space: ContactSpace):
     return SlidingSolver(model.assembly, model.law, model.settings, mode=sliding, method=method, space=space)
 
 
+def _linear_solver(solver):
+    """The Newton linear solver of a contact solver (a sliding solver's current one)."""
+    return solver.solver.linear if isinstance(solver, SlidingSolver) else solver.linear
+
+
 def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool = True,
               resume: bool = False) -> Outcome:
     stage_times = {}
@@ -119,7 +124,7 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     write_final_vtu(path, out_dir / "interface_final.vtu")
     stage_times["outputs_s"] = time.perf_counter() - clock
     summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
-               **result.figures}
+               **result.figures, "linear_solver": _linear_solver(solver).description()}
     summary.update(solver.summary() if isinstance(solver, SlidingSolver) else
                    {"sliding": "small", "sliding_mode": "small", "pairing": model.assembly.pairing.method})
     if model.coupling is not None:

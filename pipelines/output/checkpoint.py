@@ -62,14 +62,8 @@ def write_snapshot(group: h5py.Group, snapshot: Snapshot, meter) -> None:
         energy.attrs["sums"] = json.dumps({"external_work": meter.external_work,
                                            "wear_release": meter.wear_release,
                                            "stick_source": meter.stick_source})
-        for name in ("_displacement", "_forces", "_gap"):
-            value = getattr(meter, name)
-            if value is not None:
-                energy.create_dataset(name, data=value)
-        if meter._stick is not None:
-            for k, value in enumerate(meter._stick):
-                energy.create_dataset(f"_stick{k}", data=value)
-            energy.attrs["stick_items"] = len(meter._stick)
+        for name, value in meter.memory().items():
+            energy.create_dataset(name, data=value)
 
 
 def read_snapshot(group: h5py.Group, meter) -> Snapshot:
@@ -91,10 +85,7 @@ def read_snapshot(group: h5py.Group, meter) -> Snapshot:
         energy = group["energy"]
         for name, value in json.loads(energy.attrs["sums"]).items():
             setattr(meter, name, value)
-        for name in ("_displacement", "_forces", "_gap"):
-            setattr(meter, name, energy[name][()] if name in energy else None)
-        if "stick_items" in energy.attrs:
-            meter._stick = tuple(energy[f"_stick{k}"][()] for k in range(energy.attrs["stick_items"]))
+        meter.recall({name: energy[name][()] for name in energy})
     return Snapshot(cof_initial=group["cof_initial"][()],
                     locked_elongation=group["locked_elongation"][()] if "locked_elongation" in group else None,
                     state=state, equilibrium=equilibrium, history=history, **scalars)

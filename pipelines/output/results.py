@@ -168,10 +168,9 @@ class ResultsWriter(Observer):
             self._row("external_work", work, "mJ")
             self._row("stored_energy", stored, "mJ")
             self._row("wear_release", self.meter.wear_release, "mJ")
-            displacement, forces = self.meter._displacement, self.meter._forces
-            dofs = np.fromiter(self.labels.values(), dtype=int)
-            self._row("control/displacement", displacement[dofs], "mm")
-            self._row("control/force", forces[dofs], "N")
+            displacement, forces = self.meter.control_values(np.fromiter(self.labels.values(), dtype=int))
+            self._row("control/displacement", displacement, "mm")
+            self._row("control/force", forces, "N")
         if record.bolt_forces is not None:
             self._row("bolt_forces", record.bolt_forces, "N")
         if self.progress is not None:

@@ -1,8 +1,8 @@
 """Benchmark: what determinism costs (`make bench`).
 
 Each scene is run in its own process twice, side by side in the same session: as shipped
-(OpenBLAS pinned to one thread, :mod:`pipelines.threads`) and with the pin switched off and
-two BLAS threads, the machine's default before issue 13. Prints wall and CPU time of each,
+(BLAS on one thread in every numerical step, :mod:`reduction.threads`) and with those limits
+switched off and two BLAS threads, the machine's default before issue 13. Prints wall and CPU time of each,
 their ratio, the load average, and writes results/bench/determinism.json. The ratio is what
 bit-identical results cost (below 1: they save time).
 """
@@ -19,7 +19,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = os.environ.get("FRETWORK_BENCH_DETERMINISM_SCENES",
                         "cylinder_on_plane,counterweight").split(",")
-UNPINNED = ("import sys, pipelines.threads as t; t.pin_blas_threads = lambda: None; "
+UNPINNED = ("import contextlib, sys, reduction.threads as t; t.single_threaded_blas = contextlib.nullcontext; "
+            "import contact.solver as s; "
+            "s.ThreadpoolController = type('Free', (), {'limit': lambda self, **k: contextlib.nullcontext()}); "
             "from pipelines.cli.main import main; sys.exit(main(sys.argv[1:]))")
 
 

@@ -28,10 +28,10 @@ def histories():
                              motions=case.motions)
     krylov_space = ContactSpace(structure)
     # Force the iterative Newton solve (GMRES with a reused preconditioner) on this small case.
-    krylov = linear.attach(krylov_space, linear.KrylovSettings(direct_below=0))
+    krylov = linear.NewtonLinearSolver(krylov_space, linear.KrylovSettings(direct_below=0))
     runs = {}
     for name, solver in (("condensed", ContactSolver(ContactSpace(structure), case.law)),
-                         ("condensed, GMRES", ContactSolver(krylov_space, case.law)),
+                         ("condensed, GMRES", ContactSolver(krylov_space, case.law, linear=krylov)),
                          ("full", full_model.FullModelSolver(model, case.law))):
         equilibrium, state = solver.initial_equilibrium(), case.initial_state(structure.n_points)
         records = []

@@ -113,6 +113,24 @@ def flat(points_per_side: int = 5, *, normal: str = "force", tangential: str = "
                 structure.patterns, _flat_points(case))
 
 
+def sphere(points_per_side: int = 22, *, radius: float = 200.0, critical_slip: float = 1e-6,
+           cof: float = 0.3, settings: NewtonSettings | None = None) -> Case:
+    """Sphere on flat in 3D: the punch of :func:`flat` (10×10 mm faces, force-controlled in z
+    and x) with the initial gap r²/(2R) of a sphere of ``radius`` (mm) centred on its face,
+    ``points_per_side``² contact points, constant COF ``cof``, critical slip in mm."""
+    case = flat_on_flat(points_per_side, layers=4)
+    points = _flat_points(case)
+    centre = 0.5 * (points.min(axis=0) + points.max(axis=0))
+    gap = np.sum((points[:, :2] - centre[:2]) ** 2, axis=1) / (2.0 * radius)
+    loads = {"normal": case.loads["normal"], "tangential": case.motions["tangential"]}
+    structure = assemble(case.bodies, case.slave, case.master, loads=loads, initial_gap=gap).structure
+    space = ContactSpace(structure)
+    law = ContactLaw(normal_stiffness=4e6, critical_slip=critical_slip)
+    solver = ContactSolver(space, law, settings or NewtonSettings())
+    return Case(f"sphere {points_per_side}x{points_per_side}, γ_crit {critical_slip:g} mm", solver, space,
+                law, ContactState.initial(structure.n_points, 2, cof), structure.patterns, points)
+
+
 def _flat_points(case) -> np.ndarray:
     from contact.interface import surface_from_facets
     body = next(b for b in case.bodies if b.name == case.slave[0])

@@ -1,0 +1,101 @@
+"""One run of a shipped scene, end to end, for the benchmarks (one run per process, so that
+its peak memory is its own).
+
+``python tests/bench/scene_run.py SCENE [--size H] [--cycles N] [--linear auto|dense]
+[--fields OUT.npz] [--plots]`` runs ``examples/SCENE.toml`` (with ``contact_size = H`` mm on
+every body that has one; the shipped procedure unless ``--cycles`` keeps only that many COF
+cycles) and prints one JSON line: verdict, points, set-up and procedure times, increments,
+CPU time per increment of the procedure (energy bookkeeping and results writing included),
+peak resident memory (MB) and the load average.
+
+Profiling (issue 14): the per-increment overhead of the counterweight was found with
+
+    .venv/bin/python -m cProfile -s tottime tests/bench/scene_run.py \\
+        counterweight_extreme --size 10 --cycles 40 | head -60
+
+and the same with ``--size 5``; the profile itself is not kept.
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import replace
+import json
+import os
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+from contact.linear import KrylovSettings  # noqa: E402
+from pipelines import scene as scenes  # noqa: E402
+from pipelines.build import build  # noqa: E402
+from pipelines.coupling import multibody_loading  # noqa: E402
+from pipelines.jobs.run import run_model  # noqa: E402
+
+#: the linear solvers a run can be asked for: the shipped choice, and the exact dense LU of
+#: the bordered closed system in every Newton iteration (the reference for equal results)
+LINEAR = {"auto": KrylovSettings(), "dense": KrylovSettings(direct_below=np.inf)}
+
+
+def overrides(path: Path, size: float | None, cycles: int | None) -> dict:
+    """Scene overrides: the contact mesh size of every body that has one, and the cycles."""
+    out = {}
+    if size is not None:
+        bodies = scenes.load(path).data["bodies"]
+        out.update({f"bodies.{name}.mesh.contact_size": size for name, body in bodies.items()
+                    if "contact_size" in body.get("mesh", {})})
+    if cycles is not None:
+        out.update({"procedure.cof_cycles": cycles, "procedure.wear_cycles": 0})
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("scene", help="name of a scene in examples/")
+    parser.add_argument("--size", type=float, default=None, help="contact mesh size, mm")
+    parser.add_argument("--plots", action="store_true")
+    parser.add_argument("--cycles", type=int, default=None, help="COF cycles only, no wear phase")
+    parser.add_argument("--linear", choices=LINEAR, default="auto",
+                        help="auto: the shipped choice; dense: exact LU of the dense system every iteration")
+    parser.add_argument("--fields", type=Path, default=None, help="write the final fields here (.npz)")
+    args = parser.parse_args(argv)
+    path = ROOT / "examples" / f"{args.scene}.toml"
+    scene = scenes.load(path, overrides(path, args.size, args.cycles))
+    start_cpu, start = time.process_time(), time.perf_counter()
+    multibody = multibody_loading(scene, None) if "coupling" in scene.data else None
+    model = build(scene, multibody=multibody)
+    model = replace(model, settings=replace(model.settings, linear=LINEAR[args.linear]))
+    setup_cpu, setup = time.process_time() - start_cpu, time.perf_counter() - start
+    setup_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    with tempfile.TemporaryDirectory() as out:
+        outcome = run_model(model, Path(out), progress=False, plots=args.plots)
+        if args.fields is not None:
+            with h5py.File(outcome.results_path, "r") as results:
+                np.savez(args.fields, **{name: results["final"][name][()] for name in ("pressure", "shear", "cof")})
+    wall, cpu = time.perf_counter() - start, time.process_time() - start_cpu
+    summary = outcome.summary
+    proc = model.procedure
+    run_up = 2 if "coupling" in scene.data else 1  # a coupled scene ramps its mean loads in too
+    increments = run_up * proc.preload_increments + summary["cycles_run"] * proc.increments_per_cycle
+    print(json.dumps({
+        "scene": args.scene, "size": args.size, "linear": args.linear, "verdict": summary["verdict"],
+        "points": model.assembly.structure.n_points, "retained_dofs": model.assembly.structure.n_dofs,
+        "increments": increments, "cycles_run": summary["cycles_run"],
+        "wall_s": wall, "cpu_s": cpu, "setup_s": setup, "setup_cpu_s": setup_cpu,
+        "procedure_cpu_per_increment_s": (cpu - setup_cpu) / increments,
+        "stage_times": outcome.stage_times, "setup_peak_rss_mb": setup_rss,
+        "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        "load_average": os.getloadavg()}))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
