@@ -103,6 +103,12 @@ class EnergyMeter:
         if self.operators is None:
             self.operators = WorkOperators(self.space)
 
+    def follow(self, space: ContactSpace) -> None:
+        """Go on in ``space``, the contact space of a new pairing of the same bodies (finite
+        sliding): the work operators are rebuilt for it; the sums and the work terms of the
+        last increment (per pattern and prescribed DOF) carry over."""
+        self.space, self.operators = space, WorkOperators(space)
+
     _MEMORY = ("amplitudes", "load_work", "reaction", "prescribed_motion")
 
     def memory(self) -> dict:

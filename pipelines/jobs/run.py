@@ -99,7 +99,7 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     writer = ResultsWriter(out_dir / "results.h5", model, space, record_every=settings.get("record_every", 1),
                            resume=resume)
     if isinstance(solver, SlidingSolver) and writer.meter is not None:
-        solver.listeners.append(lambda current: setattr(writer.meter, "space", current))
+        solver.listeners.append(writer.meter.follow)
     bar = ProgressBar(total, progress, model.scene.name,
                       done=writer.snapshot.cycle_number if writer.snapshot else 0)
     writer.progress = bar

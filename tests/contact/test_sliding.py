@@ -47,7 +47,7 @@ def _run(mode, overrides=None):
     model = build(scenes.load(SCENE, {"contact.sliding": mode, **(overrides or {})}))
     solver = SlidingSolver(model.assembly, model.law, model.settings, mode=mode)
     meter = EnergyMeter(solver.space, model.law)
-    solver.listeners.append(lambda space: setattr(meter, "space", space))
+    solver.listeners.append(meter.follow)
 
     class Meter(procedure.Observer):
         def increment(self, record):
