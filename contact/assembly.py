@@ -151,6 +151,28 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     "bolt.<name>" that ramps in the preload and is locked afterwards.
     pairing: "auto", "node_to_segment" or "mortar" (see :func:`contact.interface.pair_surfaces`).
     """
+    surfaces = _contact_surfaces(bodies, slave, master)
+    condensed, n = _condense_bodies(bodies, surfaces)
+    stiffness = _block_stiffness(condensed, n)
+    pairing = pair_with_gap(surfaces[slave[0]], surfaces[master[0]], search_distance, initial_gap, pairing)
+    dim = pairing.normal.shape[1]
+    G = kinematic_operator(pairing, _surface_dofs(condensed[slave[0]], surfaces[slave[0]], dim),
+                           _surface_dofs(condensed[master[0]], surfaces[master[0]], dim), n)
+    labels = _reference_labels(condensed, dim)
+
+    load_vectors, motion_vectors, prescribed = control_patterns(labels, n, loads, motions)
+    bolt_set = _add_bolt_patterns(bolts, labels, n, load_vectors) if bolts else None
+    _add_body_loads(condensed, n, load_vectors)
+    structure = Structure(stiffness=stiffness, contact_operator=G, area=pairing.area,
+                          initial_overclosure=pairing.initial_overclosure, dim=dim,
+                          prescribed=prescribed, loads=load_vectors, motions=motion_vectors,
+                          labels=labels, bolts=bolt_set)
+    return Assembly(structure, condensed, pairing, slave[0], master[0])
+
+
+def _contact_surfaces(bodies: list[Body], slave: tuple[str, np.ndarray],
+                      master: tuple[str, np.ndarray]) -> dict[str, Surface]:
+    """Body name → contact surface, for the slave and the master body."""
     by_name = {b.name: b for b in bodies}
     for role, (name, _) in (("slave", slave), ("master", master)):
         if name not in by_name:
@@ -160,48 +182,59 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
                 master[0]: surface_from_facets(by_name[master[0]].elastic.mesh, master[1], f"{master[0]} surface")}
     if slave[0] == master[0]:
         raise InputError("slave and master surfaces must belong to different bodies")
+    return surfaces
+
+
+def _condense_bodies(bodies: list[Body], surfaces: dict[str, Surface]) -> tuple[dict[str, CondensedBody], int]:
+    """Condense each body in order; returns body name → condensed body and the total DOF count."""
     condensed, offset = {}, 0
     for body in bodies:
         item = _condense_body(body, surfaces.get(body.name), offset)
         condensed[body.name] = item
         offset += item.size
-    n = offset
+    return condensed, offset
+
+
+def _block_stiffness(condensed: dict[str, CondensedBody], n: int) -> np.ndarray:
+    """(n, n) block-diagonal stiffness of the condensed bodies, N/mm."""
     stiffness = np.zeros((n, n))
     for item in condensed.values():
         index = slice(item.offset, item.offset + item.size)
         stiffness[index, index] = item.condensation.stiffness
-    pairing = pair_with_gap(surfaces[slave[0]], surfaces[master[0]], search_distance, initial_gap, pairing)
-    dim = pairing.normal.shape[1]
+    return stiffness
 
-    def surface_dofs(name):
-        item = condensed[name]
-        return item.offset + np.arange(surfaces[name].nodes.size * dim).reshape(-1, dim)
 
-    G = kinematic_operator(pairing, surface_dofs(slave[0]), surface_dofs(master[0]), n)
+def _surface_dofs(item: CondensedBody, surface: Surface, dim: int) -> np.ndarray:
+    """(n_surface_nodes, dim) global DOFs of a condensed body's contact surface."""
+    return item.offset + np.arange(surface.nodes.size * dim).reshape(-1, dim)
+
+
+def _reference_labels(condensed: dict[str, CondensedBody], dim: int) -> dict[str, int]:
+    """Label "body.reference.component" → global DOF, for every reference point."""
     labels = {}
     for item in condensed.values():
         for ref_name, dofs in item.reference_dofs.items():
             rotations = item.body.reference_points[ref_name].rotations
             for comp, dof in zip(component_names(dim, rotations), dofs):
                 labels[f"{item.body.name}.{ref_name}.{comp}"] = int(dof)
+    return labels
 
-    load_vectors, motion_vectors, prescribed = control_patterns(labels, n, loads, motions)
-    bolt_set = None
-    if bolts:
-        vectors = np.array([bolt_vector(bolt, labels, n) for bolt in bolts])
-        names = tuple(f"bolt.{bolt.name}" for bolt in bolts)
-        for name, bolt, vector in zip(names, bolts, vectors):
-            load_vectors[name] = pretension_pattern(bolt, vector)
-        bolt_set = BoltSet(tuple(bolts), vectors, names)
+
+def _add_bolt_patterns(bolts: tuple, labels: dict[str, int], n: int, load_vectors: dict) -> BoltSet:
+    """Add a "bolt.<name>" pretension pattern to ``load_vectors`` per bolt; returns the bolt set."""
+    vectors = np.array([bolt_vector(bolt, labels, n) for bolt in bolts])
+    names = tuple(f"bolt.{bolt.name}" for bolt in bolts)
+    for name, bolt, vector in zip(names, bolts, vectors):
+        load_vectors[name] = pretension_pattern(bolt, vector)
+    return BoltSet(tuple(bolts), vectors, names)
+
+
+def _add_body_loads(condensed: dict[str, CondensedBody], n: int, load_vectors: dict) -> None:
+    """Add each body's condensed body loads to the pattern of the same name in ``load_vectors``."""
     # Body loads act everywhere; where a DOF is prescribed its share goes to the reaction.
     for item in condensed.values():
         for name, vector in item.condensation.loads.items():
             load_vectors.setdefault(name, np.zeros(n))[item.offset:item.offset + item.size] += vector
-    structure = Structure(stiffness=stiffness, contact_operator=G, area=pairing.area,
-                          initial_overclosure=pairing.initial_overclosure, dim=dim,
-                          prescribed=prescribed, loads=load_vectors, motions=motion_vectors,
-                          labels=labels, bolts=bolt_set)
-    return Assembly(structure, condensed, pairing, slave[0], master[0])
 
 
 def pair_with_gap(slave: Surface, master: Surface, search_distance: float,

@@ -22,7 +22,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from contact.assembly import Body, component_names, control_patterns, pair_with_gap
-from contact.interface import Pairing, kinematic_operator, surface_from_facets
+from contact.interface import Pairing, Surface, kinematic_operator, surface_from_facets
 from contact.law import ContactLaw, ContactState, Response, evaluate
 from contact.linear import tangent_blocks
 from contact.solver import Effects, IncrementStats, NewtonSettings, advance_with_cutbacks
@@ -69,81 +69,127 @@ def build(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, 
           initial_gap: np.ndarray | None = None) -> FullModel:
     """The full model of the inputs that :func:`contact.assembly.assemble` condenses (same arguments)."""
     by_name = {b.name: b for b in bodies}
-    for role, (name, _) in (("slave", slave), ("master", master)):
-        if name not in by_name:
-            raise InputError(f"{role} surface names body {name!r}, which is not defined "
-                             f"(bodies: {', '.join(by_name)})")
-    if slave[0] == master[0]:
-        raise InputError("slave and master surfaces must belong to different bodies")
-    surfaces = {name: surface_from_facets(by_name[name].elastic.mesh, facets, f"{name} surface")
-                for name, facets in (slave, master)}
-
+    surfaces = _contact_surfaces(by_name, slave, master)
     blocks, offsets, kept_maps, fixed_all, labels, offset = [], {}, {}, [], {}, 0
     for body in bodies:
-        elastic = body.elastic
-        stiffness, kept = elastic.stiffness, np.arange(elastic.n_dofs)
-        names = list(body.reference_points)
-        coupling = None
-        if names:
-            points = [body.reference_points[n] for n in names]
-            rotations = {p.rotations for p in points}
-            if len(rotations) > 1:
-                raise InputError(f"body {body.name}: all reference points of one body must agree on "
-                                 "coupling rotations")
-            coupling = rigid_couplings(elastic.n_dofs, elastic.node_dofs, elastic.coordinates,
-                                       [(np.asarray(p.nodes), p.position) for p in points],
-                                       rotations=rotations.pop())
-            stiffness, kept = coupling.reduce_matrix(stiffness), coupling.kept
-            reference = np.atleast_2d(coupling.reference_dofs)
-            for k, name in enumerate(names):
-                for comp, dof in zip(component_names(elastic.dim, points[k].rotations), reference[k]):
-                    labels[f"{body.name}.{name}.{comp}"] = offset + int(dof)
-        if body.name in surfaces and np.any(kept[elastic.node_dofs[surfaces[body.name].nodes]] < 0):
-            raise InputError(f"body {body.name}: the contact surface shares nodes with a "
-                             "reference-point coupling; couple a different node set")
-        if len(body.fixed_nodes):
-            fixed = kept[elastic.node_dofs[np.asarray(body.fixed_nodes)][:, list(body.fixed_components)]].ravel()
-            if np.any(fixed < 0):
-                raise InputError(f"body {body.name}: fixed nodes overlap a reference-point coupling")
-            fixed_all.append(offset + fixed)
-        blocks.append(sp.csr_matrix(stiffness))
+        block, kept, fixed, body_labels = _body_block(body, surfaces.get(body.name), offset)
+        labels.update(body_labels)
+        if fixed is not None:
+            fixed_all.append(fixed)
+        blocks.append(block)
         offsets[body.name], kept_maps[body.name] = offset, kept
-        offset += stiffness.shape[0]
+        offset += block.shape[0]
     n_all = offset
     stiffness_all = sp.block_diag(blocks, format="csr")
 
     load_vectors, motion_vectors, prescribed = control_patterns(labels, n_all, loads, motions)
-    fixed = np.concatenate(fixed_all) if fixed_all else np.zeros(0, dtype=int)
-    if np.intersect1d(fixed, prescribed).size:
-        raise InputError("a prescribed control DOF is also held fixed")
-    free = np.setdiff1d(np.arange(n_all), np.concatenate([fixed, prescribed]))
-    index = np.full(n_all, -1)
-    index[free] = np.arange(free.size)
-
+    free, index = _free_numbering(n_all, fixed_all, prescribed)
     pairing = pair_with_gap(surfaces[slave[0]], surfaces[master[0]], search_distance, initial_gap)
-
-    def surface_dofs(name):
-        elastic = by_name[name].elastic
-        dofs = index[offsets[name] + kept_maps[name][elastic.node_dofs[surfaces[name].nodes]]]
-        if np.any(dofs < 0):
-            raise InputError(f"body {name}: fixed nodes overlap the contact surface")
-        return dofs
-
-    G = kinematic_operator(pairing, surface_dofs(slave[0]), surface_dofs(master[0]), free.size)
-    patterns = tuple(load_vectors) + tuple(motion_vectors)
-    force = np.column_stack([load_vectors[p][free] if p in load_vectors else np.zeros(free.size)
-                             for p in patterns] or [np.zeros(free.size)])[:, :len(patterns)]
-    motion = np.column_stack([motion_vectors[p][prescribed] if p in motion_vectors
-                              else np.zeros(prescribed.size) for p in patterns]
-                             or [np.zeros(prescribed.size)])[:, :len(patterns)]
-    where = {label: ("prescribed", int(np.searchsorted(prescribed, dof))) if dof in prescribed
-             else ("free", int(index[dof])) for label, dof in labels.items() if index[dof] >= 0 or dof in prescribed}
+    slave_dofs = _surface_dofs(by_name[slave[0]], surfaces[slave[0]], offsets[slave[0]], kept_maps[slave[0]], index)
+    master_dofs = _surface_dofs(by_name[master[0]], surfaces[master[0]], offsets[master[0]], kept_maps[master[0]],
+                                index)
+    G = kinematic_operator(pairing, slave_dofs, master_dofs, free.size)
+    patterns, force, motion = _pattern_columns(load_vectors, motion_vectors, free, prescribed)
+    where = _control_labels(labels, index, prescribed)
     return FullModel(stiffness=stiffness_all[free][:, free].tocsr(),
                      prescribed_stiffness=stiffness_all[free][:, prescribed].tocsr(),
                      contact_operator=G, area=pairing.area,
                      initial_overclosure=pairing.initial_overclosure, dim=pairing.normal.shape[1],
                      pattern_force=force, pattern_motion=motion, patterns=patterns, pairing=pairing,
                      labels=where)
+
+
+def _contact_surfaces(by_name: dict[str, Body], slave: tuple[str, np.ndarray],
+                      master: tuple[str, np.ndarray]) -> dict[str, Surface]:
+    """Body name → contact surface, for the slave and the master body."""
+    for role, (name, _) in (("slave", slave), ("master", master)):
+        if name not in by_name:
+            raise InputError(f"{role} surface names body {name!r}, which is not defined "
+                             f"(bodies: {', '.join(by_name)})")
+    if slave[0] == master[0]:
+        raise InputError("slave and master surfaces must belong to different bodies")
+    return {name: surface_from_facets(by_name[name].elastic.mesh, facets, f"{name} surface")
+            for name, facets in (slave, master)}
+
+
+def _body_block(body: Body, surface: Surface | None, offset: int):
+    """One body's block of the global model, its DOFs numbered from ``offset``.
+
+    Returns the stiffness (CSR, N/mm) on the kept DOFs, kept (n_body_dofs,) (index of each
+    original DOF among the kept ones, −1 where coupled), the global fixed DOFs (None when the
+    body has no fixed nodes) and the control DOF labels → global DOF.
+    """
+    elastic = body.elastic
+    stiffness, kept, labels = _couple_reference_points(body, offset)
+    if surface is not None and np.any(kept[elastic.node_dofs[surface.nodes]] < 0):
+        raise InputError(f"body {body.name}: the contact surface shares nodes with a "
+                         "reference-point coupling; couple a different node set")
+    fixed = None
+    if len(body.fixed_nodes):
+        fixed = kept[elastic.node_dofs[np.asarray(body.fixed_nodes)][:, list(body.fixed_components)]].ravel()
+        if np.any(fixed < 0):
+            raise InputError(f"body {body.name}: fixed nodes overlap a reference-point coupling")
+        fixed = offset + fixed
+    return sp.csr_matrix(stiffness), kept, fixed, labels
+
+
+def _couple_reference_points(body: Body, offset: int):
+    """RBE2-couple the body's reference points: (stiffness, kept, labels → global DOF)."""
+    elastic = body.elastic
+    names = list(body.reference_points)
+    labels = {}
+    if not names:
+        return elastic.stiffness, np.arange(elastic.n_dofs), labels
+    points = [body.reference_points[n] for n in names]
+    rotations = {p.rotations for p in points}
+    if len(rotations) > 1:
+        raise InputError(f"body {body.name}: all reference points of one body must agree on "
+                         "coupling rotations")
+    coupling = rigid_couplings(elastic.n_dofs, elastic.node_dofs, elastic.coordinates,
+                               [(np.asarray(p.nodes), p.position) for p in points],
+                               rotations=rotations.pop())
+    stiffness = coupling.reduce_matrix(elastic.stiffness)
+    reference = np.atleast_2d(coupling.reference_dofs)
+    for k, name in enumerate(names):
+        for comp, dof in zip(component_names(elastic.dim, points[k].rotations), reference[k]):
+            labels[f"{body.name}.{name}.{comp}"] = offset + int(dof)
+    return stiffness, coupling.kept, labels
+
+
+def _free_numbering(n_all: int, fixed_all: list[np.ndarray], prescribed: np.ndarray):
+    """Free DOFs (neither fixed nor prescribed) and index (n_all,): free number of each DOF, −1 if none."""
+    fixed = np.concatenate(fixed_all) if fixed_all else np.zeros(0, dtype=int)
+    if np.intersect1d(fixed, prescribed).size:
+        raise InputError("a prescribed control DOF is also held fixed")
+    free = np.setdiff1d(np.arange(n_all), np.concatenate([fixed, prescribed]))
+    index = np.full(n_all, -1)
+    index[free] = np.arange(free.size)
+    return free, index
+
+
+def _surface_dofs(body: Body, surface: Surface, offset: int, kept: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """(n_surface_nodes, dim) free global DOFs of a body's contact surface."""
+    dofs = index[offset + kept[body.elastic.node_dofs[surface.nodes]]]
+    if np.any(dofs < 0):
+        raise InputError(f"body {body.name}: fixed nodes overlap the contact surface")
+    return dofs
+
+
+def _pattern_columns(load_vectors: dict, motion_vectors: dict, free: np.ndarray, prescribed: np.ndarray):
+    """Pattern names (loads, then motions), force (n_free, n_patterns) N, motion (n_prescribed, n_patterns) mm."""
+    patterns = tuple(load_vectors) + tuple(motion_vectors)
+    force = np.column_stack([load_vectors[p][free] if p in load_vectors else np.zeros(free.size)
+                             for p in patterns] or [np.zeros(free.size)])[:, :len(patterns)]
+    motion = np.column_stack([motion_vectors[p][prescribed] if p in motion_vectors
+                              else np.zeros(prescribed.size) for p in patterns]
+                             or [np.zeros(prescribed.size)])[:, :len(patterns)]
+    return patterns, force, motion
+
+
+def _control_labels(labels: dict[str, int], index: np.ndarray, prescribed: np.ndarray) -> dict:
+    """Control DOF name → ("free" | "prescribed", index); fixed control DOFs are left out."""
+    return {label: ("prescribed", int(np.searchsorted(prescribed, dof))) if dof in prescribed
+            else ("free", int(index[dof])) for label, dof in labels.items() if index[dof] >= 0 or dof in prescribed}
 
 
 @dataclass(frozen=True)

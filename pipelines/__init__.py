@@ -3,7 +3,8 @@
 No physics lives here: each module wires the packages below (reduction, mbs, contact) together.
 
 Modules and sub-packages, in the order data flows through them:
-    scene/         TOML scene -> validated Scene (schema.py: keys, types, validation)
+    scene/         TOML scene -> validated Scene (schema.py: keys, types, validation; checks.py:
+                   cross-references)
     examples       the shipped scenes (package data; the repository's examples/ folder)
     coupling       the [coupling] table: multibody stage, CW inertia patterns, cycle program
     build          Scene -> Model: meshes, bodies, condensed assembly, law, program, procedure

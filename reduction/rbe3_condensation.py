@@ -63,13 +63,9 @@ class ReferencedCondensation:
         return self.base.expand(base_retained, load_factors)
 
 
-def attach_rbe3(condensation: Condensation, couplings: list[DistributingCoupling]) -> ReferencedCondensation:
-    """Replace the coupled DOFs of each RBE3 coupling by its reference DOFs.
-
-    Every coupled DOF must be retained in ``condensation``; node sets must not overlap.
-    """
-    if not couplings:
-        raise InputError("attach_rbe3 needs at least one distributing coupling")
+def _split_positions(condensation: Condensation,
+                     couplings: list[DistributingCoupling]) -> tuple[np.ndarray, np.ndarray]:
+    """Positions, in ``condensation.retained``, of the coupled DOFs and of the DOFs kept as they are."""
     position_of = np.full(condensation.n_dofs, -1, dtype=np.int64)
     position_of[condensation.retained] = np.arange(condensation.retained.size)
     coupled = np.concatenate([c.coupled_dofs for c in couplings])
@@ -80,28 +76,25 @@ def attach_rbe3(condensation: Condensation, couplings: list[DistributingCoupling
         raise InputError("an RBE3 coupled DOF is not retained in the condensation: retain the bearing-area DOFs")
     is_kept = np.ones(condensation.retained.size, dtype=bool)
     is_kept[coupled_positions] = False
-    kept_positions = np.flatnonzero(is_kept)
+    return coupled_positions, np.flatnonzero(is_kept)
 
-    n_k, n_c = kept_positions.size, coupled_positions.size
+
+def _stacked_averaging(couplings: list[DistributingCoupling], n_c: int) -> np.ndarray:
+    """Block-diagonal averaging matrix: reference DOFs (rows) from the coupled DOFs (columns)."""
     sizes = [c.averaging.shape[0] for c in couplings]
     if len(set(sizes)) > 1:
         raise InputError("RBE3 couplings mix reference points with and without rotations; use one kind")
-    n_ref = sum(sizes)
-    averaging = np.zeros((n_ref, n_c))
+    averaging = np.zeros((sum(sizes), n_c))
     row = column = 0
     for coupling, size in zip(couplings, sizes):
         width = coupling.coupled_dofs.size
         averaging[row:row + size, column:column + width] = coupling.averaging[:, coupling.coupled_dofs].toarray()
         row, column = row + size, column + width
+    return averaging
 
-    s = condensation.stiffness
-    s_kk = s[np.ix_(kept_positions, kept_positions)]
-    s_kc = s[np.ix_(kept_positions, coupled_positions)]
-    s_cc = s[np.ix_(coupled_positions, coupled_positions)]
-    inner = np.block([[s_cc, averaging.T], [averaging, np.zeros((n_ref, n_ref))]])
-    coupling_inner = np.block([[s_kc.T, np.zeros((n_c, n_ref))], [np.zeros((n_ref, n_k)), -np.eye(n_ref)]])
-    outer = np.zeros((n_k + n_ref, n_k + n_ref))
-    outer[:n_k, :n_k] = s_kk
+
+def _factor_saddle_point(inner: np.ndarray):
+    """LU factor of the saddle-point block; InputError when the block is singular."""
     with np.errstate(all="ignore"):
         factor = sla.lu_factor(inner, check_finite=True)
         probe = np.cos(np.arange(inner.shape[0]))
@@ -111,6 +104,30 @@ def attach_rbe3(condensation: Condensation, couplings: list[DistributingCoupling
             np.linalg.norm(inner @ solution - probe) > 1e-8 * np.linalg.norm(probe):
         raise InputError("RBE3 elimination is singular: a bearing area can move without strain; "
                          "clamp or retain more of the body, or couple without rotations")
+    return factor
+
+
+def attach_rbe3(condensation: Condensation, couplings: list[DistributingCoupling]) -> ReferencedCondensation:
+    """Replace the coupled DOFs of each RBE3 coupling by its reference DOFs.
+
+    Every coupled DOF must be retained in ``condensation``; node sets must not overlap.
+    """
+    if not couplings:
+        raise InputError("attach_rbe3 needs at least one distributing coupling")
+    coupled_positions, kept_positions = _split_positions(condensation, couplings)
+    n_k, n_c = kept_positions.size, coupled_positions.size
+    averaging = _stacked_averaging(couplings, n_c)
+    n_ref = averaging.shape[0]
+
+    s = condensation.stiffness
+    s_kk = s[np.ix_(kept_positions, kept_positions)]
+    s_kc = s[np.ix_(kept_positions, coupled_positions)]
+    s_cc = s[np.ix_(coupled_positions, coupled_positions)]
+    inner = np.block([[s_cc, averaging.T], [averaging, np.zeros((n_ref, n_ref))]])
+    coupling_inner = np.block([[s_kc.T, np.zeros((n_c, n_ref))], [np.zeros((n_ref, n_k)), -np.eye(n_ref)]])
+    outer = np.zeros((n_k + n_ref, n_k + n_ref))
+    outer[:n_k, :n_k] = s_kk
+    factor = _factor_saddle_point(inner)
     schur = outer - coupling_inner.T @ sla.lu_solve(factor, coupling_inner)
 
     inner_loads, loads = {}, {}

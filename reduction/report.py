@@ -149,11 +149,60 @@ def accuracy_report(stiffness, mass, interface_dofs, n_modes: int, *, fixed=(), 
     fixed = np.asarray(fixed, dtype=np.int64)
     interface = np.asarray(interface_dofs, dtype=np.int64)
     cb = craig_bampton(k, m, interface, n_modes, fixed=fixed, solver=solver)
+    counts = _mode_counts(mode_counts, n_modes)
+    full = _full_model_reference(k, m, fixed, interface, n_modes, n_frequencies, solver)
+    reduced_hz, mac = _reduced_modes(cb, counts, full.free, full.vectors, n_frequencies)
+    static_error = _reduced_statics_error(cb, full.static_dofs, full.static)
+    return AccuracyReport(
+        n_dofs=k.shape[0],
+        n_interface=interface.size,
+        mode_counts=counts,
+        full_hz=_hz(full.values),
+        reduced_hz=np.array(reduced_hz),
+        mac=np.array(mac),
+        interface_fixed_full_hz=_hz(full.interface_fixed_values),
+        interface_fixed_reduced_hz=cb.fixed_interface_frequencies_hz[:full.interface_fixed_count],
+        static_dofs=full.static_dofs,
+        static_error=static_error,
+        rigid_modes=full.rigid_modes,
+        reduction_time_s=cb.reduction_time_s,
+        full_model_time_s=full.time_s,
+    )
+
+
+def _mode_counts(mode_counts, n_modes: int) -> np.ndarray:
+    """Sorted distinct mode counts in 0..n_modes; by default about eight of them."""
     counts = np.unique(np.linspace(0, n_modes, 8).round().astype(int)) if mode_counts is None \
-        else np.asarray(sorted(set(int(c) for c in mode_counts)))
+        else np.asarray(sorted({int(c) for c in mode_counts}))
     if counts.max() > n_modes or counts.min() < 0:
         raise InputError(f"mode counts must lie in 0..{n_modes}, got {counts.tolist()}")
+    return counts
 
+
+@dataclass(frozen=True)
+class _FullModelReference:
+    """What the reductions are compared with, from the full sparse model.
+
+    free: (n_free,) DOFs not clamped. values (eigenvalues, (rad/s)^2) and vectors (n_free, f):
+    the first elastic modes. interface_fixed_values: the first eigenvalues with the interfaces
+    held too, interface_fixed_count of them. static_dofs, static: see :func:`_full_statics`.
+    time_s: time to compute all of it, s.
+    """
+
+    free: np.ndarray
+    values: np.ndarray
+    vectors: np.ndarray
+    rigid_modes: int
+    interface_fixed_values: np.ndarray
+    interface_fixed_count: int
+    static_dofs: np.ndarray
+    static: np.ndarray
+    time_s: float
+
+
+def _full_model_reference(k, m, fixed: np.ndarray, interface: np.ndarray, n_modes: int,
+                          n_frequencies: int, solver: str) -> _FullModelReference:
+    """Modes (interfaces free and fixed) and interface statics of the full model, timed."""
     start = time.perf_counter()
     free = np.setdiff1d(np.arange(k.shape[0]), fixed)
     k_free, m_free = k[free][:, free], m[free][:, free]
@@ -167,7 +216,14 @@ def accuracy_report(stiffness, mass, interface_dofs, n_modes: int, *, fixed=(), 
                     if interior_fixed_count else np.zeros(0))
     static_dofs, full_static = _full_statics(k_free, free, interface, fixed.size > 0, solver)
     full_time = time.perf_counter() - start
+    return _FullModelReference(free, full_values, full_vectors, rigid, fixed_values, interior_fixed_count,
+                               static_dofs, full_static, full_time)
 
+
+def _reduced_modes(cb: CraigBampton, counts: np.ndarray, free: np.ndarray, full_vectors: np.ndarray,
+                   n_frequencies: int) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Per mode count: the reduced model's first elastic frequencies (Hz) and their MAC with
+    the full modes; NaN where the reduced model has fewer modes."""
     reduced_hz, mac = [], []
     for count in counts:
         reduced = cb.truncated(int(count))
@@ -181,23 +237,7 @@ def accuracy_report(stiffness, mass, interface_dofs, n_modes: int, *, fixed=(), 
         row_mac[: expanded.shape[1]] = _mac(full_vectors[:, : expanded.shape[1]], expanded)
         reduced_hz.append(r_hz)
         mac.append(row_mac)
-
-    static_error = _reduced_statics_error(cb, static_dofs, full_static)
-    return AccuracyReport(
-        n_dofs=k.shape[0],
-        n_interface=interface.size,
-        mode_counts=counts,
-        full_hz=_hz(full_values),
-        reduced_hz=np.array(reduced_hz),
-        mac=np.array(mac),
-        interface_fixed_full_hz=_hz(fixed_values),
-        interface_fixed_reduced_hz=cb.fixed_interface_frequencies_hz[:interior_fixed_count],
-        static_dofs=static_dofs,
-        static_error=static_error,
-        rigid_modes=rigid,
-        reduction_time_s=cb.reduction_time_s,
-        full_model_time_s=full_time,
-    )
+    return reduced_hz, mac
 
 
 def _full_statics(k_free, free, interface, clamped: bool, solver: str):

@@ -6,10 +6,12 @@ procedure, and the *effects* it wants (``cof_evolution``, ``wear``). Validation 
 problem at once, each naming its key, and nothing is built before the scene is valid.
 Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
 
-Modules: :mod:`pipelines.scene.schema` (the keys, their types and meaning, :func:`validate`);
-this package reads scene files (``scene.base`` chains, overrides) into a :class:`Scene`. Typed
-views of its tables live with their users (``pipelines.coupling.CouplingSettings``,
-``contact.procedure.Procedure``), each with its defaults in one place.
+Modules: :mod:`pipelines.scene.schema` (the keys, their types and meaning, :func:`validate`),
+:mod:`pipelines.scene.checks` (the cross-reference checks that :func:`validate` runs: bodies,
+materials, reference points, selections, effects, bolts, patterns); this package reads scene
+files (``scene.base`` chains, overrides) into a :class:`Scene`. Typed views of its tables live
+with their users (``pipelines.coupling.CouplingSettings``, ``contact.procedure.Procedure``),
+each with its defaults in one place.
 """
 
 from __future__ import annotations

@@ -1,8 +1,9 @@
 """The keys of a scene file, their types, ranges and meaning, and the validation of a parsed scene.
 
 :func:`validate` checks the schema table by table, then the cross-references (bodies,
-materials, reference points, selections, effects) of the tables the schema found sound, and
-returns every problem at once, each a sentence naming its key, with "did you mean" for typos.
+materials, reference points, selections, effects; in :mod:`pipelines.scene.checks`) of the
+tables the schema found sound, and returns every problem at once, each a sentence naming its
+key, with "did you mean" for typos.
 Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
 """
 
@@ -208,51 +209,15 @@ def _check_table(table, schema, where, problems) -> bool:
     return sound
 
 
-def _check_selection(selection, where, dim, problems):
-    if not isinstance(selection, dict):
-        problems.append(f"'{where}' must be a table (a selection: box, boxes, axis and value, ring or set)")
-        return
-    keys = set(selection) - {"body"}
-    if not keys:
-        problems.append(f"'{where}' needs a selection: box = [[min...], [max...]], boxes = [box, ...], axis = ... with "
-                        "value = ..., ring = {{ center, axis, inner_radius, outer_radius }}, "
-                        "or set = \"name\" (a node set of the mesh file)")
-    for key in keys:
-        if key == "set":
-            if not isinstance(selection["set"], str) or not selection["set"]:
-                problems.append(f"'{where}.set' must be the name of a node set of the body's mesh file")
-            continue
-        if key == "ring":
-            ring = selection["ring"]
-            if not (isinstance(ring, dict) and isinstance(ring.get("center"), list) and len(ring["center"]) == dim
-                    and ring.get("axis") in ("x", "y", "z")[:dim]
-                    and isinstance(ring.get("inner_radius"), NUMBER) and isinstance(ring.get("outer_radius"), NUMBER)
-                    and 0 <= ring["inner_radius"] < ring["outer_radius"]):
-                problems.append(f"'{where}.ring' needs center ({dim} mm), axis, 0 <= inner_radius < outer_radius (mm)")
-            continue
-        if key in ("box", "boxes"):
-            boxes = [selection["box"]] if key == "box" else selection["boxes"]
-            if not isinstance(boxes, list) or not boxes or not all(
-                    isinstance(box, list) and len(box) == 2 and all(
-                        isinstance(c, list) and len(c) == dim and all(isinstance(v, NUMBER) for v in c) for c in box)
-                    for box in boxes):
-                shape = f"[[min x, y{', z' if dim == 3 else ''}], [max ...]]"
-                problems.append(f"'{where}.{key}' must be {shape if key == 'box' else '[' + shape + ', ...]'} in mm")
-        elif key == "axis":
-            if selection["axis"] not in ("x", "y", "z")[:dim]:
-                problems.append(f"'{where}.axis' must be one of {('x', 'y', 'z')[:dim]}")
-            if not isinstance(selection.get("value"), NUMBER):
-                problems.append(f"'{where}.value' must be the coordinate (mm) of the plane")
-        elif key not in ("value", "tolerance"):
-            problems.append(f"unknown key '{where}.{key}'{_suggest(key, ['box', 'boxes', 'axis', 'value', 'tolerance'])}")
-
-
 def validate(data: dict, source: str = "scene") -> list[str]:
     """All problems of a parsed scene, each a sentence naming its key; empty when valid.
 
     The schema is checked first, table by table; each semantic check (cross-references, effects,
     selections) then runs when the tables it reads are sound in structure (:func:`_check_table`):
     a malformed table has been reported, and its cross-references cannot be followed."""
+    # checks.py reads this module's tables, so it is imported here rather than at the top
+    from pipelines.scene.checks import SEMANTIC_CHECKS
+
     problems: list[str] = []
     for key in data:
         if key not in TOP_LEVEL:
@@ -281,155 +246,3 @@ def validate(data: dict, source: str = "scene") -> list[str]:
         if not broken.intersection(tables):
             check(data, problems)
     return problems
-
-
-def _check_patterns(data, problems):
-    names = set()
-    for kind in ("loads", "motions"):
-        entries = data.get(kind, [])
-        if not isinstance(entries, list):
-            problems.append(f"'{kind}' must be an array of tables ([[{kind}]])")
-            continue
-        for k, entry in enumerate(entries):
-            _check_table(entry, PATTERN_KEYS, f"{kind}[{k}]", problems)
-            name = entry.get("name") if isinstance(entry, dict) else None
-            if isinstance(name, str) and name in names:
-                problems.append(f"'{kind}[{k}].name' '{name}' is used twice")
-            if isinstance(entry, dict):
-                names.add(name if isinstance(name, str) else f"<{kind}[{k}]>")
-                dof = entry.get("dof", "")
-                if isinstance(dof, str) and dof.count(".") != 2:
-                    problems.append(f"'{kind}[{k}].dof' must read 'body.point.component', got {dof!r}")
-    for k, entry in enumerate(data.get("body_loads", []) if isinstance(data.get("body_loads", []), list) else []):
-        _check_table(entry, BODY_LOAD_KEYS, f"body_loads[{k}]", problems)
-        if not isinstance(entry, dict):
-            continue
-        name = entry.get("name")
-        if isinstance(name, str) and name in names:
-            problems.append(f"'body_loads[{k}].name' '{name}' is used twice")
-        names.add(name if isinstance(name, str) else f"<body_loads[{k}]>")
-        body = data.get("bodies", {}).get(entry["body"]) if isinstance(entry.get("body"), str) else None
-        if body is None:
-            problems.append(f"'body_loads[{k}].body' must name one of the bodies")
-        elif "density" not in data.get("materials", {}).get(body.get("material"), {}):
-            problems.append(f"'body_loads[{k}]' acts on body '{entry['body']}', whose material has no density")
-        needed = "acceleration" if entry.get("kind") == "gravity" else "angular_velocity"
-        if entry.get("kind") in ("gravity", "centrifugal") and needed not in entry:
-            problems.append(f"'body_loads[{k}].{needed}' is missing for a {entry['kind']} load")
-    if not names and "coupling" not in data:
-        problems.append("the scene has no [[loads]], [[motions]] or [coupling]")
-
-
-def _check_effects(data, problems):
-    for effect in data["scene"]["effects"]:
-        if effect not in KNOWN_EFFECTS:
-            problems.append(f"unknown effect '{effect}' in 'scene.effects'{_suggest(str(effect), KNOWN_EFFECTS)}")
-        elif effect not in CONTACT_EFFECTS and "coupling" not in data:
-            problems.append(f"effect '{effect}' in 'scene.effects' acts through the multibody model and "
-                            "needs a [coupling] table")
-    if "coupling" in data:
-        coupling = data["coupling"]
-        body = data.get("bodies", {}).get(coupling.get("body"))
-        if body is None:
-            problems.append(f"'coupling.body' must name one of the bodies ({', '.join(data.get('bodies', {}))})")
-        elif "density" not in data.get("materials", {}).get(body.get("material"), {}):
-            problems.append(f"'coupling.body' is '{coupling['body']}', whose material has no density "
-                            "(the coupling loads it with its inertia)")
-        if data["scene"]["dimension"] != 3:
-            problems.append("a scene with [coupling] must be 3D ('scene.dimension' = 3)")
-        mbs_effects = data.get("mbs", {}).get("effects") if isinstance(data.get("mbs"), dict) else None
-        if mbs_effects is not None:
-            problems.append("'mbs.effects' is set by 'scene.effects' in a coupled scene: list the multibody "
-                            f"effects {MULTIBODY_EFFECTS} there")
-
-
-def _check_bodies(data, problems):
-    dim = data["scene"]["dimension"]
-    materials, bodies = data["materials"], data["bodies"]
-    for name, body in bodies.items():
-        if body["material"] not in materials:
-            problems.append(f"'bodies.{name}.material' names '{body['material']}', which is not in [materials]")
-        mesh = body["mesh"]
-        if "generator" in mesh:
-            generator = mesh["generator"]
-            if not isinstance(generator, str):
-                problems.append(f"'bodies.{name}.mesh.generator' must name a generator ({', '.join(MESH_GENERATORS)})")
-            elif generator not in MESH_GENERATORS:
-                problems.append(f"'bodies.{name}.mesh.generator' '{generator}' is unknown"
-                                f"{_suggest(generator, MESH_GENERATORS)}")
-            else:
-                for key in MESH_GENERATORS[generator]:
-                    if not isinstance(mesh.get(key), NUMBER) or mesh.get(key) <= 0:
-                        problems.append(f"'bodies.{name}.mesh.{key}' must be a positive number (mm or count)")
-        elif "file" not in mesh:
-            problems.append(f"'bodies.{name}.mesh' needs 'generator' or 'file'")
-        if "fixed" in body:
-            fixed = body["fixed"]
-            if "nodes" not in fixed:
-                problems.append(f"'bodies.{name}.fixed.nodes' is missing (a selection)")
-            else:
-                _check_selection(fixed["nodes"], f"bodies.{name}.fixed.nodes", dim, problems)
-            components = fixed.get("components", [])
-            for comp in components if isinstance(components, list) else [components]:
-                if comp not in ("ux", "uy", "uz")[:dim]:
-                    problems.append(f"'bodies.{name}.fixed.components' has '{comp}'; use ux, uy{', uz' if dim == 3 else ''}")
-        for ref_name, ref in body.get("reference_points", {}).items():
-            where = f"bodies.{name}.reference_points.{ref_name}"
-            if not isinstance(ref, dict):
-                problems.append(f"'{where}' must be a table {{ nodes = selection, position = [...] }}")
-                continue
-            for key in ref:
-                if key not in ("nodes", "position", "rotations"):
-                    problems.append(f"unknown key '{where}.{key}'{_suggest(key, ['nodes', 'position', 'rotations'])}")
-            if "nodes" not in ref:
-                problems.append(f"'{where}.nodes' is missing (a selection)")
-            else:
-                _check_selection(ref["nodes"], f"{where}.nodes", dim, problems)
-            position = ref.get("position")
-            if not (isinstance(position, list) and len(position) == dim):
-                problems.append(f"'{where}.position' must be {dim} coordinates in mm")
-
-
-def _check_contact(data, problems):
-    scene, bodies, dim = data["scene"], data["bodies"], data["scene"]["dimension"]
-    contact = data["contact"]
-    for role in ("slave", "master"):
-        selection = contact[role]
-        if not isinstance(selection.get("body"), str) or selection["body"] not in bodies:
-            problems.append(f"'contact.{role}.body' must name one of the bodies ({', '.join(bodies)})")
-        _check_selection(selection, f"contact.{role}", dim, problems)
-    if (isinstance(contact["cof_max"], NUMBER) and isinstance(contact["cof_initial"], NUMBER)
-            and contact["cof_max"] < contact["cof_initial"]):
-        problems.append("'contact.cof_max' must be >= 'contact.cof_initial'")
-    wear = contact.get("wear_coefficients", [0.0, 0.0])
-    if len(wear) != 2 or not all(isinstance(w, NUMBER) and w >= 0 for w in wear):
-        problems.append("'contact.wear_coefficients' must be two non-negative numbers [slave, master], mm²/N")
-    if "wear" in scene["effects"] and not any(wear):
-        problems.append("effect 'wear' is listed but 'contact.wear_coefficients' are zero or missing")
-    if "cof_evolution" in scene["effects"] and not contact.get("cof_rate"):
-        problems.append("effect 'cof_evolution' is listed but 'contact.cof_rate' is zero or missing")
-
-
-def _check_bolts(data, problems):
-    bolts, effects = data.get("bolts", {}), data["scene"]["effects"]
-    if bolts and "bolts" not in effects:
-        problems.append("[bolts] are defined but 'bolts' is not in 'scene.effects'")
-    if "bolts" in effects and not bolts:
-        problems.append("effect 'bolts' is listed but no [bolts.NAME] table defines a bolt")
-    dim = data["scene"]["dimension"]
-    for name, bolt in bolts.items():
-        axis = bolt["axis"]
-        if len(axis) != dim or not any(axis):
-            problems.append(f"'bolts.{name}.axis' must be a nonzero vector of {dim} numbers")
-        for end in ("head", "nut"):
-            body, _, point = bolt[end].partition(".")
-            if point not in data["bodies"].get(body, {}).get("reference_points", {}):
-                problems.append(f"'bolts.{name}.{end}' names '{bolt[end]}', which is not a reference point")
-
-
-#: Semantic checks and the tables each reads (run when the schema found those tables sound).
-SEMANTIC_CHECKS = ((_check_effects, ("scene", "materials", "bodies", "coupling")),
-                   (_check_bodies, ("scene", "materials", "bodies")),
-                   (_check_contact, ("scene", "bodies", "contact")),
-                   (_check_bolts, ("scene", "bodies", "bolts")),
-                   (_check_patterns, ("materials", "bodies")))

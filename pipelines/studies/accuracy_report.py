@@ -27,6 +27,23 @@ def plot_pareto(study: dict, path: str | Path) -> Path:
     fig, ax = plt.subplots(figsize=(10, 7))
     finished = [r for r in study["records"] if r["failure"] is None]
     front = {id(r) for r in pareto_front(finished)}
+    notes = _plot_runs(ax, finished, front)
+    rec = study["recommendation"]
+    _plot_front_and_axes(ax, finished, front, rec)
+    ax.set_title(_pareto_title(study), fontsize=9)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    ax.grid(True, which="both", alpha=0.3)
+    if rec:
+        notes.append(f"recommended: {rec['label']}")
+    fig.text(0.01, 0.01, "\n".join(notes), fontsize=7, va="bottom")
+    fig.tight_layout(rect=(0, 0.02 + 0.025 * len(notes), 1, 1))
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def _plot_runs(ax, finished: list[dict], front: set[int]) -> list[str]:
+    """One labelled point per finished run; returns the notes that spell out numbered labels."""
     notes = []  # combinations carry long labels: numbered on the plot, spelled out below it
     for record in finished:
         error = 100 * record["worst_error"]
@@ -42,10 +59,14 @@ def plot_pareto(study: dict, path: str | Path) -> Path:
         label += f" [{SHORT_NAMES[worst]}]" if worst and record["worst_error"] > 0 else ""
         ax.annotate(label, (record[COST], error), fontsize=7, xytext=(4, 3 + 9 * (label[0] == "C") * len(notes)),
                     textcoords="offset points")
+    return notes
+
+
+def _plot_front_and_axes(ax, finished: list[dict], front: set[int], rec: dict | None) -> None:
+    """The Pareto front line, the recommended run, the tolerance line, the scales and axis labels."""
     line = sorted((r[COST], 100 * r["worst_error"]) for r in finished if id(r) in front)
     if line:
         ax.plot(*zip(*line), color="0.6", lw=1, zorder=2, label="Pareto front")
-    rec = study["recommendation"]
     if rec:
         ax.scatter(rec[COST], 100 * rec["worst_error"], s=180, facecolors="none", edgecolors="k",
                    zorder=4, label="recommended")
@@ -55,6 +76,10 @@ def plot_pareto(study: dict, path: str | Path) -> Path:
     ax.set_ylim(bottom=0.0, top=3 * max([100 * r["worst_error"] for r in finished] + [100 * TOLERANCE]))
     ax.set_xlabel("CPU time of the run (build and solve, one BLAS thread) [s]")
     ax.set_ylabel("worst decision-quantity error [%]  (x: verdict differs)")
+
+
+def _pareto_title(study: dict) -> str:
+    """Scene, reference settings, overrides common to all runs, and the runs that did not converge."""
     reference = study["reference"]["settings"]
     title = (f"accuracy vs time: {study['scene']}\nreference: "
              + ", ".join(f"{k}={v:g}" for k, v in reference.items()))
@@ -63,16 +88,7 @@ def plot_pareto(study: dict, path: str | Path) -> Path:
     failed = [r["label"] for r in study["records"] if r["failure"]]
     if failed:
         title += f"\nnot converged: {'; '.join(failed)}"
-    ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-    ax.grid(True, which="both", alpha=0.3)
-    if rec:
-        notes.append(f"recommended: {rec['label']}")
-    fig.text(0.01, 0.01, "\n".join(notes), fontsize=7, va="bottom")
-    fig.tight_layout(rect=(0, 0.02 + 0.025 * len(notes), 1, 1))
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return title
 
 
 def table_lines(study: Study) -> list[str]:

@@ -98,28 +98,42 @@ def _plan_with_hole(length: float, width: float, hole_x: float, hole_radius: flo
     n_fine = int(round((fine_to - fine_from) / size))
     fine = hole_x + size * np.arange(int(round((fine_from - hole_x) / size)),
                                      int(round((fine_from - hole_x) / size)) + n_fine + 1)
-
-    def grow(start, end, step):
-        points, x, h = [], start, step
-        while abs(end - x) > 1e-9:
-            h = min(h * 1.3, coarse_size)
-            x = x + np.sign(end - x) * min(h, abs(end - x))
-            if abs(end - x) < 0.5 * h:
-                x = end
-            points.append(x)
-        return points
-
-    xs = np.unique(np.round(np.concatenate([grow(fine[0], 0.0, size)[::-1], fine,
-                                            grow(fine[-1], length, size)]), 9))
+    xs = np.unique(np.round(np.concatenate([_graded_points(fine[0], 0.0, size, coarse_size)[::-1], fine,
+                                            _graded_points(fine[-1], length, size, coarse_size)]), 9))
     ys = np.linspace(-width / 2, width / 2, 2 * int(round(half_cells)) + 1)
+    grid_nodes, grid_quads = _grid_outside_block(xs, ys, hole_x, block_half)
+    ring_nodes, ring_quads = _o_grid(hole_x, hole_radius, block_half, block_cells, size, grid_nodes.shape[0])
+    return _merge_coincident([grid_nodes, ring_nodes], [grid_quads, *ring_quads])
+
+
+def _graded_points(start: float, end: float, step: float, coarse_size: float) -> list[float]:
+    """Points from ``start`` (excluded) to ``end`` (included), spacing growing ×1.3 up to coarse_size."""
+    points, x, h = [], start, step
+    while abs(end - x) > 1e-9:
+        h = min(h * 1.3, coarse_size)
+        x = x + np.sign(end - x) * min(h, abs(end - x))
+        if abs(end - x) < 0.5 * h:
+            x = end
+        points.append(x)
+    return points
+
+
+def _grid_outside_block(xs: np.ndarray, ys: np.ndarray, hole_x: float, block_half: float):
+    """Tensor grid on xs × ys: all its nodes (n, 2) and the quads (m, 4) outside the hole block."""
     gx, gy = np.meshgrid(xs, ys, indexing="ij")
-    nodes = [np.column_stack([gx.ravel(), gy.ravel()])]
+    nodes = np.column_stack([gx.ravel(), gy.ravel()])
     index = np.arange(gx.size).reshape(gx.shape)
     cx = 0.5 * (xs[:-1, None] + xs[1:, None]) + 0 * ys[None, :-1]
     cy = 0.5 * (ys[None, :-1] + ys[None, 1:]) + 0 * xs[:-1, None]
     keep = ~((np.abs(cx - hole_x) < block_half) & (np.abs(cy) < block_half))
-    quads = [np.stack([index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]], axis=-1)[keep]]
+    quads = np.stack([index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]], axis=-1)[keep]
+    return nodes, quads
 
+
+def _o_grid(hole_x: float, hole_radius: float, block_half: float, block_cells: float, size: float,
+            offset: int):
+    """O-grid from the hole's circle to the block's square: nodes (n, 2) numbered from
+    ``offset``, and one (n_perimeter, 4) quad array per ring."""
     n_side = int(round(2 * block_cells))
     edge = np.linspace(-block_half, block_half, n_side + 1)[:-1]
     square = np.concatenate([np.column_stack([edge, -block_half + 0 * edge]),
@@ -131,15 +145,20 @@ def _plan_with_hole(length: float, width: float, hole_x: float, hole_radius: flo
     n_rings = max(2, int(np.ceil((block_half - hole_radius) / size)))
     rho = np.linspace(0.0, 1.0, n_rings + 1)
     ring_nodes = circle[None] + rho[:, None, None] * (square - circle)[None]  # (rings, perimeter, 2)
-    offset = gx.size
-    nodes.append(ring_nodes.reshape(-1, 2) + np.array([hole_x, 0.0]))
+    nodes = ring_nodes.reshape(-1, 2) + np.array([hole_x, 0.0])
     n_perimeter = square.shape[0]
     k = np.arange(n_perimeter)
     ring_index = offset + np.arange(ring_nodes.shape[0] * n_perimeter).reshape(ring_nodes.shape[:2])
+    quads = []
     for layer in range(n_rings):
         inner, outer = ring_index[layer], ring_index[layer + 1]
         quads.append(np.stack([inner[k], outer[k], outer[(k + 1) % n_perimeter],
                                inner[(k + 1) % n_perimeter]], axis=-1))
+    return nodes, quads
+
+
+def _merge_coincident(nodes: list[np.ndarray], quads: list[np.ndarray]):
+    """Merge nodes that coincide to 1e-9 mm and drop nodes no quad uses; returns (points, quads)."""
     points = np.concatenate(nodes)
     unique, inverse = np.unique(np.round(points, 9), axis=0, return_inverse=True)
     cells = inverse.ravel()[np.concatenate(quads)]
