@@ -340,8 +340,8 @@ class FullModelSolver:
         stats.iterations += settings.max_iterations
         return None
 
-    def _failure_reason(self) -> str:
-        return "Newton did not converge on the full model"
+    def _failure_reason(self) -> tuple[str, str]:
+        return "diverged", "Newton did not converge on the full model"
 
     def increment(self, start: FullEquilibrium, state: ContactState, amplitudes: np.ndarray,
                   effects: Effects) -> tuple[FullEquilibrium, ContactState, np.ndarray, IncrementStats]:

@@ -148,14 +148,9 @@ class RunStopped(ConvergenceError):
 
 
 def failure_ending(error: ConvergenceError) -> Ending:
-    """The ending of a run whose increment raised ``error``. The solver raises one exception type
-    and states the cause in its message; this is the one place that reads it."""
-    message = str(error)
-    if "tangential equilibrium is lost" in message:
-        return Ending.SLID_OFF
-    if "wear increment stays above the cap" in message:
-        return Ending.WEAR_RUNAWAY
-    return Ending.DIVERGED
+    """The ending of a run whose increment raised ``error``: read from its typed cause."""
+    return {"slid_off": Ending.SLID_OFF, "wear_runaway": Ending.WEAR_RUNAWAY}.get(
+        getattr(error, "cause", "diverged"), Ending.DIVERGED)
 
 
 class Observer:

@@ -22,7 +22,16 @@ from contact.structure import ContactSpace
 
 
 class ConvergenceError(RuntimeError):
-    """An increment did not converge within the allowed cutbacks; the message says why."""
+    """An increment did not converge within the allowed cutbacks; the message says why.
+
+    cause: the reason, for code to read: "slid_off" (tangential equilibrium lost: the load
+    exceeds what friction can carry), "wear_runaway" (the wear increment does not shrink with
+    the step) or "diverged" (anything else).
+    """
+
+    def __init__(self, message: str, cause: str = "diverged"):
+        super().__init__(message)
+        self.cause = cause
 
 
 @dataclass(frozen=True)
@@ -329,14 +338,15 @@ class ContactSolver:
         self._last_failure = (response, r_ctl, force_scale, loaded)
         return None
 
-    def _failure_reason(self) -> str:
-        """Why the last attempt failed, in words: lost tangential equilibrium or plain divergence."""
-        generic = ("Newton did not converge (the step may be too large for the contact status "
-                   "changes; try more increments)")
+    def _failure_reason(self) -> tuple[str, str]:
+        """Why the last attempt failed: (cause, words), the cause "slid_off" for lost tangential
+        equilibrium, else "diverged" (see :class:`ConvergenceError`)."""
+        generic = ("diverged", "Newton did not converge (the step may be too large for the contact "
+                   "status changes; try more increments)")
         response, r_ctl, force_scale, loaded = self._last_failure
         if loaded and not np.any(response.pressure > 0.0):
-            return ("no point of the interface stays pressed: the load pulls the body off the "
-                    "contact, and a body held only by the contact has no equilibrium then "
+            return ("diverged", "no point of the interface stays pressed: the load pulls the body off "
+                    "the contact, and a body held only by the contact has no equilibrium then "
                     "(support it, or prescribe the motion of its control DOF instead of a force)")
         closed = response.status != Status.OPEN
         if not self.rigid_modes.size or not np.any(closed) or np.any(response.status[closed] == Status.STICK):
@@ -344,8 +354,8 @@ class ContactSolver:
         if np.linalg.norm(self.rigid_modes.T @ r_ctl) <= self.settings.force_tolerance * force_scale:
             return generic
         capacity = float(np.sum(np.linalg.norm(response.shear, axis=1) * self.area))
-        return (f"tangential equilibrium is lost: all {int(closed.sum())} closed contact points slide "
-                f"at |τ| = μ·p (friction capacity {capacity:.6g} N) and the force-controlled DOFs "
+        return ("slid_off", f"tangential equilibrium is lost: all {int(closed.sum())} closed contact points "
+                f"slide at |τ| = μ·p (friction capacity {capacity:.6g} N) and the force-controlled DOFs "
                 "cannot be balanced; the applied load exceeds what friction can carry, so no "
                 "static solution exists (prescribe a motion instead of a force to drive the "
                 "interface into gross slip)")
@@ -386,17 +396,18 @@ def advance_with_cutbacks(solver, start, state: ContactState, amplitudes: np.nda
             too_much_wear = float(wear_now.max(initial=0.0)) > solver.settings.wear_cap
         if solved is None or too_much_wear:
             if level >= solver.settings.max_cutbacks:
-                reason = (f"the wear increment stays above the cap {solver.settings.wear_cap:g} mm "
-                          f"({float(wear_now.max()):.3g} mm in the smallest sub-step); wear that "
-                          "does not shrink with the step makes the interface slip by itself "
-                          "(explicit wear is unstable at this cycle jump): lower the cycle "
-                          f"jump ({effects.cycle_jump:g}) or the wear coefficients, or raise "
-                          "the cap" if too_much_wear else solver._failure_reason())
+                cause, reason = (("wear_runaway",
+                                  f"the wear increment stays above the cap {solver.settings.wear_cap:g} mm "
+                                  f"({float(wear_now.max()):.3g} mm in the smallest sub-step); wear that "
+                                  "does not shrink with the step makes the interface slip by itself "
+                                  "(explicit wear is unstable at this cycle jump): lower the cycle "
+                                  f"jump ({effects.cycle_jump:g}) or the wear coefficients, or raise "
+                                  "the cap") if too_much_wear else solver._failure_reason())
                 raise ConvergenceError(
                     f"increment to amplitudes {np.round(amplitudes, 6).tolist()} failed with "
                     f"sub-steps of 2^-{level} of it ({stats.cutbacks} cutbacks), the last "
                     f"converged amplitudes being {np.round(equilibrium.amplitudes, 6).tolist()}: "
-                    f"{reason}")
+                    f"{reason}", cause)
             stats.cutbacks += 1
             level += 1
             streak = 0

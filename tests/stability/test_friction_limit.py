@@ -144,6 +144,7 @@ def _assert_clear_failure(case, rows):
     with pytest.raises(ConvergenceError, match="tangential equilibrium is lost") as failure:
         drive(case, rows, watchdog)
     message = str(failure.value)
+    assert failure.value.cause == "slid_off"  # what code reads; the words are for the engineer
     assert "exceeds what friction can carry" in message
     assert "prescribe a motion" in message
     return watchdog, message
