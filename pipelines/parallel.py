@@ -103,6 +103,9 @@ def map_cases(function: Callable, cases: Sequence[tuple[object, dict]], *, sched
 
 def _call(function: Callable, kwargs: dict, **shared) -> tuple[bool, object]:
     """Run one case; an exception comes back as text so that dask does not retry it."""
+    from reduction.threads import pin_process
+
+    pin_process()  # a worker of a cluster we did not start has the default thread count
     try:
         return True, function(**kwargs, **shared)
     except Exception as error:  # the case fails, the sweep goes on: report it, whatever it is

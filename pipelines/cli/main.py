@@ -360,6 +360,9 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     handler = getattr(args, "func", None) or getattr(args, "handler")
     from contact.solver import ConvergenceError
+    from reduction.threads import pin_process
+
+    pin_process()  # the same scene gives the same bits whatever the thread settings
 
     try:
         return handler(args)
