@@ -271,30 +271,40 @@ class ContactSolver:
             solved = self._newton(start, state, amplitudes, stats, window=self.settings.line_search_window)
         return solved
 
-    def _newton(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
-                stats: IncrementStats, window: int) -> tuple[Equilibrium, Response] | None:
-        g_f, f_q = self.space.driving(amplitudes)
+    def _scales(self, start: Equilibrium, amplitudes: np.ndarray, f_q: np.ndarray) -> tuple[float, bool]:
+        """The force scale (N) of the convergence test, and whether a load acts along a rigid
+        mode of the free control DOFs (``loaded``)."""
         force_scale = max(1.0, float(np.max(np.abs(f_q), initial=0.0)),
                           float(np.max(np.abs(start.forces), initial=0.0)))
-        reference = start.kinematics
-        q = start.control.copy()
         # A load along a rigid mode: with no point pressed the body floats (no equilibrium).
         # Prescribed motions leave round-off there (K·rigid mode ≈ 0), hence their scale.
         motion = float(np.max(np.abs(self.space.pattern_motion @ amplitudes), initial=0.0))
         drive_scale = force_scale + self.stiffness_scale * motion
         loaded = bool(np.any(np.abs(self.rigid_modes.T @ f_q)
                              > self.settings.force_tolerance * drive_scale))
-        # Two predictors: the contact kinematics follow the drive (right in gross slip and for
-        # a free approach) or stay put (right where the interface sticks; with a stiff elastic
-        # stick, small γ_crit, following the drive makes every point slide at first and
-        # Newton then crawls back to stick a few points per iteration). Start from the better.
+        return force_scale, loaded
+
+    def _predictor(self, start: Equilibrium, state: ContactState, q, g_f, f_q, force_scale):
+        """(merit, g, residual) of the better of two predictors: the contact kinematics follow
+        the drive (right in gross slip and for a free approach) or stay put (right where the
+        interface sticks; with a stiff elastic stick, small γ_crit, following the drive makes
+        every point slide at first and Newton then crawls back to stick a few points per
+        iteration)."""
         best = None
         for g in (start.kinematics, start.kinematics + (g_f - self.space.driving(start.amplitudes)[0])):
-            candidate = self._residual(g, q, state, reference, g_f, f_q)
+            candidate = self._residual(g, q, state, start.kinematics, g_f, f_q)
             candidate_merit = self._merit(candidate[0], candidate[1], force_scale)
             if best is None or candidate_merit < best[0]:
                 best = (candidate_merit, g, candidate)
-        merit, g, (r_kin, r_ctl, response, forces) = best
+        return best
+
+    def _newton(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
+                stats: IncrementStats, window: int) -> tuple[Equilibrium, Response] | None:
+        g_f, f_q = self.space.driving(amplitudes)
+        force_scale, loaded = self._scales(start, amplitudes, f_q)
+        reference = start.kinematics
+        q = start.control.copy()
+        merit, g, (r_kin, r_ctl, response, forces) = self._predictor(start, state, q, g_f, f_q, force_scale)
         recent, history, stalled = [merit], [merit], False  # merits for the line search
         for iteration in range(1, self.settings.max_iterations + 1):
             try:
