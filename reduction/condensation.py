@@ -17,7 +17,6 @@ import scipy.sparse as sp
 from reduction.errors import InputError
 from reduction import pardiso
 from reduction.factorization import factorize, resolve_solver
-from reduction.threads import single_threaded_blas
 
 #: columns of K_ir solved per block; bounds the dense work array to n_interior x 512 floats.
 _RHS_BLOCK = 512
@@ -86,15 +85,7 @@ def condense(stiffness, retained, fixed=(), loads=None, *, solver: str = "auto")
     The interior block K_ii must be non-singular: retained plus fixed DOFs must stop every
     rigid-body motion of the interior. Otherwise InputError, raised here or, with PARDISO (whose
     Schur complement is still right then), at the first interior solve (loads, ``expand``).
-    BLAS and PARDISO run on one thread (:mod:`reduction.threads`): the result does not depend
-    on the machine's thread settings.
     """
-    with single_threaded_blas():
-        return _condense(stiffness, retained, fixed, loads, solver)
-
-
-def _condense(stiffness, retained, fixed, loads, solver: str) -> Condensation:
-    """:func:`condense` without the thread limit."""
     matrix = sp.csr_matrix(stiffness)
     n_dofs = matrix.shape[0]
     if matrix.shape != (n_dofs, n_dofs):
@@ -164,10 +155,9 @@ class InteriorSolver:
         self._factor = None
 
     def __call__(self, rhs: np.ndarray) -> np.ndarray:
-        with single_threaded_blas():
-            if self._factor is None:
-                self._factor = factorize(self.k_ii, solver=self.solver, label="interior stiffness K_ii")
-            return self._factor.solve(rhs)
+        if self._factor is None:
+            self._factor = factorize(self.k_ii, solver=self.solver, label="interior stiffness K_ii")
+        return self._factor.solve(rhs)
 
     def release(self) -> None:
         self._factor = None

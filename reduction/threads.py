@@ -4,15 +4,20 @@ Threaded BLAS and MKL (PARDISO) split their sums differently for different threa
 so the last digits of a factorisation, and after thousands of contact increments every
 digit of a field, changed with OPENBLAS_NUM_THREADS / MKL_NUM_THREADS: the same scene gave
 different results on a laptop and on a cluster node, and a run resumed in another process
-was not bit for bit the uninterrupted one. The condensation and the contact-space set-up
-therefore run their BLAS on one thread (on the shared 2-core machine a second thread saved
-little there), as every contact increment does (:class:`contact.solver.ContactSolver`).
+was not bit for bit the uninterrupted one. The contact-space set-up therefore runs its
+BLAS on one thread (on the shared 2-core machine a second thread saved little there), as
+every contact increment does (:class:`contact.solver.ContactSolver`).
 
-Those limits cover the library's own steps. A whole job touches more: the multibody loading,
-the inertia patterns of a coupled scene, the energy bookkeeping between increments. Measured:
-with only the per-step limits, the counterweight scene (extreme case, 270 cycles) still ended
-with 37 result datasets different between one and two threads. So every fretwork process (the
-command line, each dask worker) also pins its BLAS to one thread for good (:func:`pin_process`).
+The limit is process-wide: a step that other threads of the same process run concurrently
+(the reduction inside dask workers with several threads) must not use it, since one
+thread's restore would undo another's limit.
+
+Those limits cover the library's own steps. A whole job touches more: the condensation, the
+multibody loading, the inertia patterns of a coupled scene, the energy bookkeeping between
+increments. Measured: with only the per-step limits, the counterweight scene (extreme case,
+270 cycles) still ended with 37 result datasets different between one and two threads. So
+every fretwork process (the command line, each dask worker) also pins its BLAS to one thread
+for good (:func:`pin_process`); a limited block then restores one thread on exit.
 """
 
 from __future__ import annotations
