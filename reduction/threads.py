@@ -36,10 +36,15 @@ def single_threaded_blas():
 
 def pin_process() -> None:
     """Limit every BLAS (NumPy's and SciPy's OpenBLAS, MKL) to one thread for the rest of the
-    process. NumPy and SciPy are imported first: threadpoolctl limits only the libraries that
-    are loaded when it is called, and each brings its own OpenBLAS build."""
+    process. NumPy, SciPy and MKL (PARDISO's, when installed) are loaded first: threadpoolctl
+    limits only the libraries that are loaded when it is called, and each brings its own
+    build (measured: with MKL loaded later, the coupled counterweight's condensed inertia
+    patterns, and so its results, differed between one and two threads)."""
     import importlib
+
+    from reduction import pardiso
 
     for module in ("numpy", "scipy.linalg", "scipy.sparse.linalg"):
         importlib.import_module(module)
+    pardiso.available()  # loads MKL where pypardiso is installed
     ThreadpoolController().limit(limits=1, user_api="blas")
