@@ -8,6 +8,7 @@ Modules, in the order data flows through them:
     mesh.io        read meshes with named node/element sets (Abaqus .inp, Gmsh .msh, scikit-fem)
     mesh.generators  the shipped meshes (cylinder, plane, blocks, beam with hole, CW and web blocks)
     mesh.selection   pick nodes and facets by plane, box, ring, cylinder, points or named set
+    mesh.motion      move surface nodes, the interior following harmonically
     elasticity     assemble K (N/mm) and M (t): ElasticBody, node-interleaved DOFs
     coupling       RBE2 (kinematic) and RBE3 (distributing) couplings to reference points
     rbe3_condensation   condensed stiffness at RBE3 reference points (bolt bearing areas)

@@ -28,8 +28,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import skfem  # noqa: E402
-from skfem.models.poisson import laplace  # noqa: E402
 
 from contact import procedure  # noqa: E402
 from contact.checks import tangent_error  # noqa: E402
@@ -39,6 +37,7 @@ from contact.solver import ContactSolver, Effects  # noqa: E402
 from contact.structure import ContactSpace  # noqa: E402
 from pipelines import scene as scenes  # noqa: E402
 from pipelines.build import build  # noqa: E402
+from reduction.mesh.motion import move_surface  # noqa: E402
 
 from pipelines import examples  # noqa: E402
 
@@ -136,21 +135,6 @@ def check_energy(scene_path, overrides, cycles, increments) -> list[dict]:
                4.0 * COF * LINE_LOAD * (slip_amplitude - model.law.critical_slip), 0.05),
         record("cylinder_on_plane/slip", "slip amplitude at the centre [mm]", slip_amplitude, 0.075, 0.03),
     ]
-
-
-def move_surface(mesh, nodes: np.ndarray, displacement: np.ndarray):
-    """Move ``nodes`` by ``displacement`` (n, dim) mm; the interior follows harmonically."""
-    element = skfem.ElementQuad1() if isinstance(mesh, skfem.MeshQuad) else skfem.ElementTriP1()
-    basis = skfem.Basis(mesh, element)
-    stiffness = skfem.asm(laplace, basis)
-    boundary = mesh.boundary_nodes()
-    moved = np.zeros_like(mesh.p)
-    for component in range(mesh.dim()):
-        prescribed = np.zeros(mesh.p.shape[1])
-        prescribed[nodes] = displacement[:, component]
-        moved[component] = skfem.solve(*skfem.condense(stiffness, np.zeros(mesh.p.shape[1]), x=prescribed,
-                                                       D=np.union1d(boundary, nodes)))
-    return type(mesh)(mesh.p + moved, mesh.t)
 
 
 def _wear_profile_figures(x, depth):

@@ -1,1 +1,1 @@
-"""Meshes: reading files with named sets, the shipped generators, node selection."""
+"""Meshes: reading files with named sets, the shipped generators, node selection, surface motion."""
