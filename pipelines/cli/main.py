@@ -301,16 +301,22 @@ def _add_limit_parser(sub) -> None:
                                        "over the range, then refine every change of verdict to the tolerance.")
     limit.add_argument("scene")
     limit.add_argument("--amplitude", required=True, metavar="LOW:HIGH", help="wing amplitude range, µm (e.g. 100:400)")
-    limit.add_argument("--tolerance", type=float, default=10.0, help="width of each refined change, µm (default 10)")
-    limit.add_argument("--grid", type=int, default=7,
-                       help="amplitudes of the first scan (default 7); their spacing is the scan's resolution")
-    limit.add_argument("--out", default="results/limit")
-    limit.add_argument("--json", action="store_true")
-    limit.add_argument("--quiet", action="store_true")
-    _add_cache_arguments(limit)
-    from pipelines.parallel import add_cluster_arguments
-    add_cluster_arguments(limit)
+    _add_scan_arguments(limit, "results/limit")
     limit.set_defaults(func=cmd_limit)
+
+
+def _add_scan_arguments(parser, out: str) -> None:
+    """The limit scan's tolerance and grid, output, progress, cache and cluster options."""
+    parser.add_argument("--tolerance", type=float, default=10.0, help="width of each refined change of verdict, "
+                                                                      "µm (default 10)")
+    parser.add_argument("--grid", type=int, default=7,
+                        help="amplitudes of the first scan (default 7); their spacing is the scan's resolution")
+    parser.add_argument("--out", default=out)
+    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--quiet", action="store_true")
+    _add_cache_arguments(parser)
+    from pipelines.parallel import add_cluster_arguments
+    add_cluster_arguments(parser)
 
 
 def _add_reduce_parser(sub) -> None:
@@ -344,14 +350,7 @@ def _add_study_parsers(sub) -> None:
     convergence.add_argument("scene")
     convergence.add_argument("--sizes", required=True, metavar="S1,S2,...", help="element sizes, mm (e.g. 10,5,2.5)")
     convergence.add_argument("--amplitude", metavar="LOW:HIGH", help="also the amplitude limit on this range, µm")
-    convergence.add_argument("--tolerance", type=float, default=10.0, help="limit tolerance, µm (default 10)")
-    convergence.add_argument("--grid", type=int, default=7, help="amplitudes of each limit scan (default 7)")
-    convergence.add_argument("--out", default="results/convergence")
-    convergence.add_argument("--json", action="store_true")
-    convergence.add_argument("--quiet", action="store_true")
-    _add_cache_arguments(convergence)
-    from pipelines.parallel import add_cluster_arguments
-    add_cluster_arguments(convergence)
+    _add_scan_arguments(convergence, "results/convergence")
     convergence.set_defaults(func=cmd_convergence)
 
 
