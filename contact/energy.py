@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from contact.law import ContactLaw, ContactState
+from contact.procedure import IncrementRecord, Observer
 from contact.solver import Equilibrium
 from contact.structure import ContactSpace
 
@@ -93,6 +94,7 @@ class EnergyMeter:
     external_work: float = 0.0
     wear_release: float = 0.0
     stick_source: float = 0.0
+    stored: float = 0.0  # stored energy after the last increment, mJ
     operators: WorkOperators | None = field(default=None, repr=False)
     _last: tuple | None = None  # amplitudes, ℓ, reactions, u_p of the last increment
     _gap: np.ndarray | None = None
@@ -171,7 +173,14 @@ class EnergyMeter:
         self._last, self._gap = (amplitudes.copy(), loads_u, reaction, u_p), gap
         self._control = equilibrium.control
         self._update_stick_source(equilibrium, state)
-        return self.external_work, strain + self._spring_energy(equilibrium, state)
+        self.stored = strain + self._spring_energy(equilibrium, state)
+        return self.external_work, self.stored
+
+    @property
+    def global_dissipation(self) -> float:
+        """Frictional dissipation measured globally after the last increment (mJ): external
+        work plus the stick source, less the stored energy and the energy wear released."""
+        return self.external_work + self.stick_source - self.stored - self.wear_release
     def _update_stick_source(self, equilibrium: Equilibrium, state: ContactState) -> None:
         """Add ∫ ½·|γ_el|²/γ_crit·d(μ·p) over the increment: first the COF update of the last
         increment at fixed γ_el and p, then the pressure change (trapezoidal in |γ_el|²)."""
@@ -188,3 +197,13 @@ class EnergyMeter:
         gamma_crit = np.broadcast_to(self.law.critical_slip, pressure.shape)
         self.stick_source += float(np.sum(structure.area * source / gamma_crit))
         self._stick = (state.cof.copy(), cof_p_end, pressure, slip_squared)
+
+
+class MeterObserver(Observer):
+    """Keeps an :class:`EnergyMeter` up with every converged increment of a procedure run."""
+
+    def __init__(self, meter: EnergyMeter):
+        self.meter = meter
+
+    def increment(self, record: IncrementRecord) -> None:
+        self.meter.update(record.equilibrium, record.state)

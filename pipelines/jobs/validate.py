@@ -31,7 +31,7 @@ import numpy as np  # noqa: E402
 
 from contact import procedure  # noqa: E402
 from contact.checks import tangent_error  # noqa: E402
-from contact.energy import EnergyMeter  # noqa: E402
+from contact.energy import EnergyMeter, MeterObserver  # noqa: E402
 from contact.law import ContactLaw, ContactState, Status, evaluate  # noqa: E402
 from contact.solver import ContactSolver, Effects  # noqa: E402
 from contact.structure import ContactSpace  # noqa: E402
@@ -111,16 +111,9 @@ def check_energy(scene_path, overrides, cycles, increments) -> list[dict]:
                                            "procedure.increments_per_cycle": increments}))
     space, solver = _solver(model)
     meter = EnergyMeter(space, model.law)
-
-    class Meter(procedure.Observer):
-        def increment(self, record_):
-            self.energies = meter.update(record_.equilibrium, record_.state)
-
-    observer = Meter()
     result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
-                           cof_evolution=False, wear=True, observer=observer)
-    work, stored = observer.energies
-    dissipation_global = work + meter.stick_source - stored - meter.wear_release
+                           cof_evolution=False, wear=True, observer=MeterObserver(meter))
+    dissipation_global = meter.global_dissipation
     area = model.assembly.structure.area
     worn_area = float(np.sum(result.state.gap * area))
     w_total = sum(model.law.wear_coefficients)

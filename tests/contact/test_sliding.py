@@ -16,30 +16,23 @@ import numpy as np
 import pytest
 
 from contact import procedure
-from contact.energy import EnergyMeter
+from contact.energy import EnergyMeter, MeterObserver
 from contact.sliding import SlidingSolver, SlidingState, worn_volumes
 from contact.solver import Effects
 from pipelines import scene as scenes
 from pipelines.build import build
 from pipelines.output.checkpoint import _read_state, _write_state
 from pipelines.jobs.run import run_scene
-
-try:
-    from threadpoolctl import threadpool_limits
-except ImportError:
-    threadpool_limits = None
+from reduction.threads import single_threaded_blas
 
 SCENE = str(Path(__file__).resolve().parents[2] / "examples" / "gross_slip_fretting.toml")
 ELEMENT = 0.1  # mm, the contact element size of the scene
 
 
 @pytest.fixture(autouse=True, scope="module")
-def single_threaded_blas():
+def one_blas_thread():
     """Tiny dense systems: oversubscribed BLAS threads only slow them down."""
-    if threadpool_limits is None:
-        yield
-        return
-    with threadpool_limits(limits=1, user_api="blas"):
+    with single_threaded_blas():
         yield
 
 
@@ -48,17 +41,9 @@ def _run(mode, overrides=None):
     solver = SlidingSolver(model.assembly, model.law, model.settings, mode=mode)
     meter = EnergyMeter(solver.space, model.law)
     solver.listeners.append(meter.follow)
-
-    class Meter(procedure.Observer):
-        def increment(self, record):
-            self.energies = meter.update(record.equilibrium, record.state)
-
-    observer = Meter()
     result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
-                           cof_evolution=False, wear=True, observer=observer)
-    work, stored = observer.energies
-    dissipation = work + meter.stick_source - stored - meter.wear_release
-    return model, solver, result, dissipation
+                           cof_evolution=False, wear=True, observer=MeterObserver(meter))
+    return model, solver, result, meter.global_dissipation
 
 
 def _worn_width(x, depth):
