@@ -3,21 +3,15 @@
 The contact-space systems of these small models are dense and tiny (≤ 150 unknowns); with
 OpenBLAS threads on a loaded 2-core machine each LU solve waits for the other thread
 (11 ms instead of 0.3 ms per solve), which made the folder 5× slower without changing any
-result. threadpoolctl is optional: without it the cases run with the default threads.
+result. The limit is the library's own (:func:`reduction.threads.single_threaded_blas`).
 """
 
 import pytest
 
-try:
-    from threadpoolctl import threadpool_limits
-except ImportError:  # the physics is the same, only slower
-    threadpool_limits = None
+from reduction.threads import single_threaded_blas
 
 
 @pytest.fixture(autouse=True, scope="module")
-def single_threaded_blas():
-    if threadpool_limits is None:
-        yield
-        return
-    with threadpool_limits(limits=1, user_api="blas"):
+def one_blas_thread():
+    with single_threaded_blas():
         yield
