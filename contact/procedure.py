@@ -149,8 +149,7 @@ class RunStopped(ConvergenceError):
 
 def failure_ending(error: ConvergenceError) -> Ending:
     """The ending of a run whose increment raised ``error``: read from its typed cause."""
-    return {"slid_off": Ending.SLID_OFF, "wear_runaway": Ending.WEAR_RUNAWAY}.get(
-        getattr(error, "cause", "diverged"), Ending.DIVERGED)
+    return {"slid_off": Ending.SLID_OFF, "wear_runaway": Ending.WEAR_RUNAWAY}.get(error.cause, Ending.DIVERGED)
 
 
 class Observer:

@@ -19,6 +19,7 @@ Amplitudes in mm internally; the command line takes µm, as engineers quote wing
 
 from __future__ import annotations
 
+import itertools
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -206,7 +207,7 @@ def _search(scene_path, low_mm, high_mm, tolerance_mm, grid, overrides, cache_di
 
     runs: dict[float, AmplitudeRun] = {}
     models = BuiltModels()
-    rounds = iter(range(1, 10_000))
+    rounds = itertools.count(1)
 
     def evaluate(amplitudes):
         label = f"limit: round {next(rounds)}"

@@ -20,6 +20,7 @@ ROOT = Path(__file__).resolve().parents[2]
 SCENES = os.environ.get("FRETWORK_BENCH_DETERMINISM_SCENES",
                         "cylinder_on_plane,counterweight").split(",")
 UNPINNED = ("import contextlib, sys, reduction.threads as t; t.single_threaded_blas = contextlib.nullcontext; "
+            "t.pin_process = lambda: None; "
             "import contact.solver as s; "
             "s.ThreadpoolController = type('Free', (), {'limit': lambda self, **k: contextlib.nullcontext()}); "
             "from pipelines.cli.main import main; sys.exit(main(sys.argv[1:]))")
