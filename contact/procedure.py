@@ -107,6 +107,7 @@ class CycleSummary:
     state: ContactState
     clamp_force: float | None
     figures: dict = field(default_factory=dict)
+    damage: dict = field(default_factory=dict)  # fretting damage fields an observer adds (pipelines.output.damage)
 
 
 @dataclass

@@ -13,6 +13,7 @@ from contact.sliding import SlidingSolver
 from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from pipelines.build import Model, build
+from pipelines.output.damage import DamageObserver
 from pipelines.output.paraview import write_final_vtu, write_interface_series
 from pipelines.output.plots import plot_results
 from pipelines.output.results import ResultsWriter
@@ -100,6 +101,9 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
                            resume=resume)
     if isinstance(solver, SlidingSolver) and writer.meter is not None:
         solver.listeners.append(writer.meter.follow)
+    observer = DamageObserver(writer, model, space)
+    if isinstance(solver, SlidingSolver):
+        solver.listeners.append(observer.follow)
     bar = ProgressBar(total, progress, model.scene.name,
                       done=writer.snapshot.cycle_number if writer.snapshot else 0)
     writer.progress = bar
@@ -107,7 +111,7 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     try:
         result = procedure.run(solver, model.initial_state(), model.program, proc,
                                cof_evolution="cof_evolution" in effects, wear="wear" in effects,
-                               observer=writer, checkpoint=writer.checkpoint,
+                               observer=observer, checkpoint=writer.checkpoint,
                                checkpoint_every=settings.get("checkpoint_every", 10),
                                resume=writer.snapshot)
     except (ConvergenceError, KeyboardInterrupt):

@@ -45,6 +45,7 @@ FIELD_UNITS = {
     "status": "code",
     "slip_range": "mm", "dissipation_in_cycle": "mJ/mm^2", "wear_depth": "mm",
     "accumulated_slip": "mm", "dissipation": "mJ/mm^2",
+    "fdp": "MPa*mm", "ffdp": "MPa^2*mm", "surface_tangential_stress": "MPa",
 }
 STATUS_NAMES = "0 open, 1 stick, 2 slip, 3 slip at cof_max"
 
@@ -205,6 +206,7 @@ class ResultsWriter(Observer):
         }
         if state.wear_depth is not None:
             fields["wear_depth"] = state.wear_depth
+        fields.update(summary.damage)
         return fields
 
     def finish(self, result) -> Path:
