@@ -140,5 +140,11 @@ class DamageTracker:
         return out
 
 
-__all__ = ["surface_strain", "tangential_stress", "slip_direction", "fretting_damage", "field_maximum",
-           "DamageTracker"]
+__all__ = [
+    "DamageTracker",
+    "field_maximum",
+    "fretting_damage",
+    "slip_direction",
+    "surface_strain",
+    "tangential_stress",
+]

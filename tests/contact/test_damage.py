@@ -3,7 +3,12 @@ displacement field, the surface stress against 3D Hooke's law, FDP and FFDP by h
 
 import numpy as np
 
-from contact.damage import fretting_damage, slip_direction, surface_strain, tangential_stress
+from contact.damage import (
+    fretting_damage,
+    slip_direction,
+    surface_strain,
+    tangential_stress,
+)
 from contact.interface import tangent_frame
 
 YOUNG, POISSON = 210e3, 0.3
