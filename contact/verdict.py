@@ -4,7 +4,7 @@
 nominal contact area, stick margin, wear, dissipation); :func:`active_slip_area_fraction` the
 area that still slides in the sense of the verdict; :func:`loosening_evident` whether the clamp
 force keeps falling while the stick area shrinks; :func:`verdict` the engineer's answer
-(``stick``, ``damage`` or ``loosening``). :class:`Ending` is why a run stopped. Pure functions of
+(``stick``, ``partial_slip``, ``damage`` or ``loosening``; :data:`VERDICT_MEANINGS`). :class:`Ending` is why a run stopped. Pure functions of
 arrays: no I/O. Units: area mm², pressure MPa, dissipation mJ/mm², slip mm, force N.
 """
 
@@ -15,6 +15,17 @@ from enum import Enum
 import numpy as np
 
 from contact.law import ContactState, Status
+
+
+VERDICT_MEANINGS = {
+    "stick": "shakedown to stick: at most the area tolerance still slides; the joint is safe at this load",
+    "partial_slip": "a stick zone holds and the clamp force is stable, but the contact edges keep sliding at a "
+                    "COF that never had to rise (constant COF, or mu_0 = mu_max): fretting at the edges, no "
+                    "friction-driven surface damage; judge crack risk by FFDP",
+    "damage": "points keep sliding at mu_max after their COF rose there (or the whole contact slides): fretting "
+              "scars expected, clamp force stable",
+    "loosening": "the clamp force keeps falling while the stick area shrinks: the joint loosens",
+}
 
 
 class Ending(str, Enum):
@@ -95,13 +106,18 @@ def active_slip_area_fraction(area: np.ndarray, nominal_area: float, pressure: n
 def verdict(history: list, procedure, stationary: bool) -> str:
     """``loosening`` (see :func:`loosening_evident`), else ``stick`` when at most ``area_tolerance``
     of the area still slid in the last cycle (:func:`active_slip_area_fraction`; histories
-    without it fall back to the status-based slip area), else ``damage``."""
+    without it fall back to the status-based slip area), else ``partial_slip`` when a stick
+    zone holds and no COF evolved (the status "slip at μ_max" of a contact with μ_0 = μ_max
+    says nothing about damage), else ``damage``. See :data:`VERDICT_MEANINGS`."""
     last = history[-1].figures
     if loosening_evident(history, procedure):
         return "loosening"
     sliding = last.get("active_slip_area_fraction", last["slip_area_fraction"])
     if sliding <= procedure.area_tolerance:
         return "stick"
+    if (last["stick_area_fraction"] > procedure.area_tolerance
+            and last.get("cof_evolved_area_fraction", 1.0) <= procedure.area_tolerance):
+        return "partial_slip"
     return "damage"
 
 

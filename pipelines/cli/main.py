@@ -44,6 +44,13 @@ def cmd_run(args) -> int:
     return 0
 
 
+def cmd_report(args) -> int:
+    from pipelines.output.report import write_report
+
+    print(write_report(args.results_dir, args.out))
+    return 0
+
+
 def _human_summary(outcome) -> str:
     s = outcome.summary
     lines = [f"scene {s['scene']}: verdict {s['verdict'].upper()}"
@@ -62,6 +69,12 @@ def _human_summary(outcome) -> str:
                      f"({100 * s['clamp_force_loss_fraction']:.2f} % loss)")
     if s.get("min_stick_margin") is not None:
         lines.append(f"  smallest safety margin of stuck points: {s['min_stick_margin']:.3f}")
+    if s.get("fdp_max_MPa_mm") is not None:
+        lines.append(f"  fretting damage: FDP max {s['fdp_max_MPa_mm']:.4g} MPa·mm, FFDP max {s['ffdp_max_MPa2_mm']:.4g} "
+                     f"MPa²·mm at {np.round(s['ffdp_max_location_mm'], 2).tolist()} mm")
+    from contact.verdict import VERDICT_MEANINGS
+
+    lines.insert(1, f"  {s['verdict']}: {VERDICT_MEANINGS.get(s['verdict'], '')}")
     if outcome.stage_times:
         times = outcome.stage_times
         phases = ", ".join(f"{k.removesuffix('_phase_s')} {v:.1f} s" for k, v in times.items() if k.endswith("_phase_s"))
@@ -247,6 +260,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     _add_run_parser(sub)
     _add_validate_and_demo_parsers(sub)
+    report = sub.add_parser("report", help="one self-contained HTML page of a run's or a job's results folder")
+    report.add_argument("results_dir", help="the --out folder of a run or a job")
+    report.add_argument("--out", default=None, help="the HTML file (default RESULTS_DIR/report.html)")
+    report.set_defaults(func=cmd_report)
     _add_limit_parser(sub)
     _add_reduce_parser(sub)
     _add_study_parsers(sub)

@@ -242,7 +242,7 @@ def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
     amplitude = np.array([1e3 * r.amplitude_mm for r in runs])
     loss = np.array([100 * (r.figures.get("clamp_force_loss_fraction") or 0.0) for r in runs])
     damaged = np.array([100 * (r.figures.get("damaged_area_fraction") or 0.0) for r in runs])
-    colours = {"stick": "tab:green", "damage": "tab:orange", "loosening": "tab:red"}
+    colours = {"stick": "tab:green", "partial_slip": "tab:olive", "damage": "tab:orange", "loosening": "tab:red"}
     figure, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
     for ax, values, label in ((axes[0], loss, "clamp-force loss (%)"), (axes[1], damaged, "damaged area (%)")):
         ax.plot(amplitude, values, color="0.6", zorder=1)

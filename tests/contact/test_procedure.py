@@ -43,3 +43,17 @@ def test_sliding_at_cof_max_with_stable_clamp_is_damage():
 def test_loosening_needs_a_full_window_of_wear_cycles():
     history = _history(20000 - 500 * np.arange(5), np.linspace(0.2, 0.0, 5), np.ones(5))
     assert not _loosening(history, PROCEDURE)
+
+
+def test_partial_slip_at_a_cof_that_never_rose_is_not_damage():
+    """μ_0 = μ_max: every sliding point has the status "slip at μ_max", but no COF evolved and a
+    stick zone holds (Cattaneo-Mindlin): partial slip, not damage; gross slip stays damage."""
+    n = 12
+    history = _history(np.full(n, 30000.0), np.full(n, 0.6), np.full(n, 0.4))
+    for summary in history:
+        summary.figures["cof_evolved_area_fraction"] = 0.0
+    assert _verdict(history, PROCEDURE, stationary=False) == "partial_slip"
+    history[-1].figures["cof_evolved_area_fraction"] = 0.3
+    assert _verdict(history, PROCEDURE, stationary=False) == "damage"
+    history[-1].figures.update(cof_evolved_area_fraction=0.0, stick_area_fraction=0.0, slip_area_fraction=1.0)
+    assert _verdict(history, PROCEDURE, stationary=False) == "damage"
