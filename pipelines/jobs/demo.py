@@ -97,6 +97,9 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
              "limit_plot": str(limit_plot), "margins_plot": str(margin_plot), "sweep": str(sweep_path)}
     (out_dir / "summary.json").write_text(json.dumps({"summary": summary, "stage_times_s": times, "files": files},
                                                      indent=2, default=float))
+    from pipelines.output.report import write_report
+
+    files["report"] = str(write_report(out_dir))
     return DemoResult(summary, times, files)
 
 
