@@ -16,6 +16,13 @@ import matplotlib.tri
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.ticker import ScalarFormatter  # noqa: E402
+from mpl_toolkits.axes_grid1 import make_axes_locatable  # noqa: E402
+
+#: Values below this magnitude (in the field's own units: mm, MPa, mJ/mm²) are round-off of a
+#: field that is zero (a stuck run's dissipation is ±1e-15, not a pattern worth a colour scale).
+ROUND_OFF = 1e-12
+PATH_POINTS = 400
 
 FIELD_LABELS = {
     "pressure": "contact pressure p [MPa]",
@@ -25,6 +32,8 @@ FIELD_LABELS = {
     "slip_range": "slip range in cycle [mm]",
     "dissipation_in_cycle": "frictional dissipation in cycle [mJ/mm²]",
     "wear_depth": "wear depth (both bodies) [mm]",
+    "fdp": "fretting damage parameter FDP = τ·δ [MPa·mm]",
+    "ffdp": "fretting fatigue parameter FFDP = σ_t·τ·δ [MPa²·mm]",
 }
 
 
@@ -34,7 +43,8 @@ def _field(group, name):
         value = np.linalg.norm(np.atleast_2d(value.T).T.reshape(value.shape[0], -1), axis=1)
     if name == "wear_depth":
         value = value.sum(axis=0)
-    return value
+    value = np.asarray(value, dtype=float)
+    return np.where(np.abs(value) < ROUND_OFF, 0.0, value)
 
 
 def _plane_axes(coordinates: np.ndarray) -> tuple[int, int]:
@@ -43,25 +53,22 @@ def _plane_axes(coordinates: np.ndarray) -> tuple[int, int]:
     return int(min(first, second)), int(max(first, second))
 
 
-def _path_plot(coordinates, final, names, a, b, title, out_dir) -> Path:
-    """Fields along the line through the middle of the interface (the paper's Figs. 9 and 12)."""
-    middle = 0.5 * (coordinates[:, b].min() + coordinates[:, b].max())
-    line_value = coordinates[np.argmin(np.abs(coordinates[:, b] - middle)), b]
-    on_line = np.abs(coordinates[:, b] - line_value) < 1e-6 * np.ptp(coordinates[:, a])
-    order = np.flatnonzero(on_line)[np.argsort(coordinates[on_line, a])]
-    shown = [n for n in ("pressure", "slip_range", "cof", "wear_depth") if n in names]
-    x = coordinates[order, a]
-    spacing = np.diff(x)
-    # No line across a hole: break it where the gap is far wider than the mesh spacing.
-    breaks = np.flatnonzero(spacing > 2.5 * np.median(spacing)) + 1 if spacing.size else []
+def _path_plot(mesh, final, names, a, b, title, out_dir) -> Path:
+    """Fields along the straight line through the middle of the interface's ``b`` extent (the
+    paper's Figs. 9 and 12), interpolated linearly over the contact facets at PATH_POINTS points;
+    gaps where the line crosses a hole or leaves the contact."""
+    middle = 0.5 * (mesh.y.min() + mesh.y.max())
+    x = np.linspace(mesh.x.min(), mesh.x.max(), PATH_POINTS)
+    shown = [n for n in ("pressure", "slip_range", "cof", "wear_depth", "fdp") if n in names]
     fig, axes = plt.subplots(len(shown), 1, figsize=(7, 1.9 * len(shown)), sharex=True)
     for ax, name in zip(np.atleast_1d(axes), shown):
-        values = _field(final, name)[order].astype(float)
-        ax.plot(np.insert(x, breaks, np.nan), np.insert(values, breaks, np.nan), "o-", ms=2.5, lw=1.2)
+        values = matplotlib.tri.LinearTriInterpolator(mesh, _field(final, name))(x, np.full_like(x, middle))
+        ax.plot(x, np.ma.filled(values.astype(float), np.nan), "-", lw=1.2)
         ax.set_ylabel(FIELD_LABELS[name], fontsize=7)
         ax.grid(alpha=0.3)
-    np.atleast_1d(axes)[-1].set_xlabel(f"{'xyz'[a]} along {'xyz'[b]} = {line_value:g} mm [mm]")
-    fig.suptitle(f"{title}: fields along the path through the middle")
+    np.atleast_1d(axes)[-1].set_xlabel(f"{'xyz'[a]} [mm] along {'xyz'[b]} = {middle + 0.0:.4g} mm "
+                                       f"(the middle of the contact's {'xyz'[b]} extent)")
+    fig.suptitle(f"{title}: fields along the line {'xyz'[b]} = {middle + 0.0:.3g} mm through the middle")
     return _save(fig, out_dir / "path.png")
 
 
@@ -73,10 +80,19 @@ def _save(fig, target: Path) -> Path:
 
 
 def _map(mesh, value, name, a, b, title, target) -> Path:
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    mappable = ax.tricontourf(mesh, value, levels=24, cmap="viridis")
-    fig.colorbar(mappable, ax=ax, label=FIELD_LABELS[name])
+    """A filled contour map, the colour bar as tall as the map; a field that is zero (or constant)
+    everywhere is drawn in one colour and said so."""
+    width, height = np.ptp(mesh.x), np.ptp(mesh.y)
+    fig, ax = plt.subplots(figsize=(6.5, float(np.clip(5.5 * height / width, 2.0, 7.0)) + 1.0))
+    constant = np.ptp(value) <= ROUND_OFF
+    if constant:
+        mappable = ax.tripcolor(mesh, value, cmap="viridis", vmin=value[0] - 1.0, vmax=value[0] + 1.0)
+        title += f" ({value[0]:g} everywhere)"
+    else:
+        mappable = ax.tricontourf(mesh, value, levels=24, cmap="viridis")
     ax.set_aspect("equal")
+    bar_axes = make_axes_locatable(ax).append_axes("right", size="4%", pad=0.1)
+    fig.colorbar(mappable, cax=bar_axes, label=FIELD_LABELS[name], ticks=[value[0]] if constant else None)
     ax.set_xlabel(f"{'xyz'[a]} [mm]")
     ax.set_ylabel(f"{'xyz'[b]} [mm]")
     ax.set_title(title, fontsize=9)
@@ -125,12 +141,12 @@ def _surface_maps(file, coordinates, names, title, out_dir) -> list[Path]:
     """3D scenes: the path plot, a map per final field and the maps after the COF phase."""
     final = file["final"]
     a, b = _plane_axes(coordinates)
-    written = [_path_plot(coordinates, final, names, a, b, title, out_dir)]
     facets = file["points/facets"][()] if "points/facets" in file else None
     # Triangles of the interface's own facets: holes (a bolt hole) stay holes.
     triangles = None if facets is None else (
         facets if facets.shape[1] == 3 else np.concatenate([facets[:, [0, 1, 2]], facets[:, [0, 2, 3]]]))
     mesh = matplotlib.tri.Triangulation(coordinates[:, a], coordinates[:, b], triangles)
+    written = [_path_plot(mesh, final, names, a, b, title, out_dir)]
     for name in names:
         written.append(_map(mesh, _field(final, name), name, a, b, f"{title}: {name.replace('_', ' ')}",
                             out_dir / f"{name}_map.png"))
@@ -167,8 +183,14 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
     axes[0].legend(fontsize=7)
     axes[0].grid(alpha=0.3)
     if has_clamp:
-        axes[1].plot(n, clamp[()] / 1000.0, color="k")
+        force = clamp[()] / 1000.0
+        axes[1].plot(n, force, color="k")
         axes[1].set_ylabel("clamp (bolt) force [kN]")
+        # plain numbers, no "1e-5+8.98515e2" offset; a steady force gets a ±0.5 % window
+        axes[1].yaxis.set_major_formatter(ScalarFormatter(useOffset=False))
+        middle, spread = np.nanmean(force), np.nanmax(force) - np.nanmin(force)
+        if spread < 1e-2 * abs(middle):
+            axes[1].set_ylim(middle - 5e-3 * abs(middle), middle + 5e-3 * abs(middle))
         axes[1].grid(alpha=0.3)
     wear = np.flatnonzero(phase == 2)
     label = "simulated load cycle"
