@@ -11,8 +11,9 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
                            (0 preload, 1 cof, 2 wear), iterations, cutbacks,
                            external_work, stored_energy, dissipation (mJ), bolt_forces
                            (rows, n_bolts) N with the bolt names in its ``bolts`` attribute,
-                           control/displacement and control/force (rows, n_dofs) mm and N,
-                           the DOF labels in the ``dofs`` attribute of /increments/control
+                           control/displacement and control/force (rows, n_dofs) mm and N (rad
+                           and N*mm for rotations: per column in their ``units``), the DOF
+                           labels in the ``dofs`` attribute of /increments/control
     /cycles/               one row per recorded cycle: cycle, phase, equivalent_cycles and one
                            dataset per global figure (figures/<name>); fields/<name> (rows, n[, k])
     /final/                the final per-point fields
@@ -214,6 +215,9 @@ class ResultsWriter(Observer):
         self._flush_increments()
         if "control/displacement" in self.file["increments"]:
             self.file["increments/control"].attrs["dofs"] = ",".join(self.labels)
+            rotation = [label.rsplit(".", 1)[-1].startswith("r") for label in self.labels]  # rx, ry, rz
+            for name, units in (("displacement", ("mm", "rad")), ("force", ("N", "N*mm"))):
+                self.file[f"increments/control/{name}"].attrs["units"] = ",".join(units[r] for r in rotation)
         final = self.file.create_group("final")
         last = result.cycles[-1]
         for name, value in self._fields(last).items():
