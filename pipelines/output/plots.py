@@ -16,8 +16,8 @@ import matplotlib.tri
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.ticker import ScalarFormatter  # noqa: E402
-from mpl_toolkits.axes_grid1 import make_axes_locatable  # noqa: E402
+from matplotlib.ticker import ScalarFormatter
+from mpl_toolkits.axes_grid1 import make_axes_locatable
 
 #: Values below this magnitude (in the field's own units: mm, MPa, mJ/mm²) are round-off of a
 #: field that is zero (a stuck run's dissipation is ±1e-15, not a pattern worth a colour scale).
