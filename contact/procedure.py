@@ -72,6 +72,9 @@ class Procedure:
     block (:mod:`contact.cycle_jump`) so that no point's pressure changes by more than
     ``jump_tolerance`` of the mean contact pressure in one block, at most ``max_cycle_jump``.
     life_cycles: the wear phase ends once it stands for this many real cycles.
+    stop_at_loosening: end the run as soon as loosening is evident (:func:`loosening_evident`);
+    False runs the wear phase on to ``life_cycles`` (or ``wear_cycles``) so that the clamp-force
+    trend of a loosening joint is seen over the whole horizon; the verdict is the same.
     """
 
     preload_increments: int = 10
@@ -85,6 +88,7 @@ class Procedure:
     cof_during_wear: bool = True
     stationary_window: int = 10
     loosening_window: int = 20
+    stop_at_loosening: bool = True
     area_tolerance: float = 0.01
     slip_tolerance: float = 0.1
 
@@ -327,7 +331,8 @@ class _Run:
             loosening = False
             if self.quiet_cycles >= self.procedure.stationary_window:
                 self.stationary = True
-            elif phase == "wear" and loosening_evident(self.history, self.procedure):
+            elif (phase == "wear" and self.procedure.stop_at_loosening
+                  and loosening_evident(self.history, self.procedure)):
                 loosening = True
             if checkpoint_every and self.cycle_number % checkpoint_every == 0:
                 self.solver.forget_cached_factorisations()

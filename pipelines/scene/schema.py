@@ -133,6 +133,7 @@ SCHEMA = {
         "wear_cap": (NUMBER, False, _positive, "largest wear increment per step, mm"),
         "stationary_window": (int, False, _integer_at_least(1), "cycles without slip for shakedown"),
         "loosening_window": (int, False, _integer_at_least(3), "cycles of falling clamp force"),
+        "stop_at_loosening": (bool, False, None, "end the run once loosening is evident (default true)"),
         "max_cutbacks": (int, False, _integer_at_least(0), "halvings of a failing increment"),
         "record_every": (int, False, _integer_at_least(1), "store fields every n cycles"),
         "checkpoint_every": (int, False, _integer_at_least(0), "write checkpoint.h5 every n cycles (0: never)"),
