@@ -13,6 +13,13 @@ height) overhangs the hub on both sides: these overhangs are the "wings". In the
 "torsion" mode the wings vibrate along the crank axis (z) in opposite phase, i.e. the CW
 twists about its radial axis.
 
+A user's own CW (``mesh_file``, an Abaqus .inp or Gmsh .msh file in the CW frame above: origin
+at the centre of the contact face, y radial outward, z along the crank axis) replaces the block:
+its corner mesh (hexahedra split into tetrahedra, mid-edge nodes of Tet10/Hex20 files put back on
+straight edges) carries quadratic tetrahedra, its node set or surface ``interface`` is the
+rigid interface, and its wing tips are the nodes nearest to the ends of the top edge
+(x extremes, y largest, z mid-plane).
+
 Craig-Bampton (Hurty) reduction with the contact face as one rigid (RBE2) interface, done by
 reduction.exudyn_bridge.floating_frame_modes: the interface is the floating frame of the reduced
 body, so the mode basis holds only the fixed-interface normal modes and the body's reference
@@ -46,6 +53,10 @@ class CounterweightGeometry:
     hub_width: tangential extent of the hub, i.e. of the bolted contact face.
     hub_height: radial height of the hub below the wing plate (the relief under the wings).
     elements_*: number of mesh cells along x, y, z (tetrahedra from a tensor grid).
+    mesh_file: a mesh file of the user's own CW (module doc) instead of the block; the block's
+    sizes are then unused. interface: name of the node set or surface of that file that is the
+    bolted contact face. mesh_digest: SHA-256 of the file (set by the scene reader, so that a
+    changed file is a changed model for the stage cache).
     """
 
     width: float = 700.0
@@ -59,8 +70,19 @@ class CounterweightGeometry:
     elements_x: int = 14
     elements_y: int = 4
     elements_z: int = 2
+    mesh_file: str | None = None
+    interface: str | None = None
+    mesh_digest: str | None = None
 
     def validate(self) -> None:
+        if self.mesh_file is not None:
+            if not self.interface:
+                raise InputError("counterweight mesh_file needs 'interface': the node set or surface of "
+                                 "the file that is the bolted contact face")
+            for name in ("youngs_modulus", "density"):
+                if getattr(self, name) <= 0:
+                    raise InputError(f"counterweight {name} must be positive, got {getattr(self, name)}")
+            return
         positive = ("width", "height", "thickness", "hub_width", "hub_height", "youngs_modulus", "density")
         for name in positive:
             if getattr(self, name) <= 0:
@@ -124,8 +146,11 @@ class ReducedCounterweight:
 
 def counterweight_mesh(geometry: CounterweightGeometry) -> skfem.MeshTet1:
     """Tetrahedral mesh of the CW block: the tensor grid cut to the CW's shape
-    (:func:`reduction.mesh.generators.counterweight_solids`), which removes the relief under the wings."""
+    (:func:`reduction.mesh.generators.counterweight_solids`), which removes the relief under the wings.
+    With ``mesh_file``, the linear tetrahedral mesh of that file (module doc)."""
     geometry.validate()
+    if geometry.mesh_file is not None:
+        return _file_mesh(geometry)[0]
     g = geometry
     half_hub = 0.5 * g.hub_width
     # Grid lines on the hub edges and on the hub-height level keep the relief boundary exact.
@@ -143,6 +168,51 @@ def counterweight_mesh(geometry: CounterweightGeometry) -> skfem.MeshTet1:
     return mesh.remove_elements(np.flatnonzero(~cells_inside(mesh, shape)))
 
 
+def corner_tetrahedra(mesh: skfem.Mesh) -> skfem.MeshTet1:
+    """The linear tetrahedral mesh on the corner nodes of a 3D scikit-fem mesh: mid-edge nodes
+    dropped (Tet10, Hex20), hexahedra split into tetrahedra."""
+    corners = np.unique(mesh.t)
+    compact = np.full(mesh.p.shape[1], -1)
+    compact[corners] = np.arange(corners.size)
+    kind = skfem.MeshHex1 if isinstance(mesh, skfem.MeshHex1) else skfem.MeshTet1
+    linear = kind(np.ascontiguousarray(mesh.p[:, corners]), np.ascontiguousarray(compact[mesh.t]))
+    return linear.to_meshtet() if kind is skfem.MeshHex1 else linear
+
+
+def wing_tip_points(coordinates: np.ndarray) -> list[tuple[float, float, float]]:
+    """Where a CW mesh's wing tips are looked for (mm): the two ends of its top edge (x extremes,
+    y largest, z mid-plane)."""
+    low, high = coordinates.min(axis=0), coordinates.max(axis=0)
+    return [(float(x), float(high[1]), float(0.5 * (low[2] + high[2]))) for x in (low[0], high[0])]
+
+
+def _file_mesh(geometry: CounterweightGeometry) -> tuple[skfem.MeshTet1, np.ndarray]:
+    """The linear tetrahedral mesh of the CW file (corner nodes; hexahedra split into tetrahedra)
+    and the mask of its vertices that belong to the interface set."""
+    from scipy.spatial import cKDTree
+
+    from reduction.mesh.io import read_mesh
+
+    model = read_mesh(geometry.mesh_file)
+    if model.mesh.dim() != 3:
+        raise InputError(f"{geometry.mesh_file}: the counterweight mesh must be 3D")
+    linear = corner_tetrahedra(model.mesh)
+    positions = model.points[model.node_set(geometry.interface)]
+    distance, index = cKDTree(positions).query(linear.p.T)
+    return linear, distance <= 1e-6 * float(np.ptp(linear.p, axis=1).max())
+
+
+def _face_nodes(mesh: skfem.MeshTet1, face: np.ndarray, geometry: CounterweightGeometry) -> np.ndarray:
+    """P2 nodes (vertices, then one per edge) of the boundary facets whose vertices all lie on
+    the interface: the rigid interface of the CW file."""
+    boundary = mesh.boundary_facets()
+    facets = boundary[np.all(face[mesh.facets[:, boundary]], axis=0)]
+    if facets.size == 0:
+        raise InputError(f"{geometry.mesh_file}: the set '{geometry.interface}' covers no boundary face of the "
+                         "counterweight mesh; name the node set or surface of its bolted contact face")
+    return np.union1d(np.unique(mesh.facets[:, facets]), mesh.p.shape[1] + np.unique(mesh.f2e[:, facets]))
+
+
 def _nodes_near(coordinates: np.ndarray, point, tolerance: float) -> int:
     distance = np.linalg.norm(coordinates - np.asarray(point, dtype=float), axis=1)
     node = int(np.argmin(distance))
@@ -151,7 +221,7 @@ def _nodes_near(coordinates: np.ndarray, point, tolerance: float) -> int:
     return node
 
 
-def _torsion_mode_index(tip_axial: np.ndarray, mode_shapes: np.ndarray) -> int:
+def torsion_mode_index(tip_axial: np.ndarray, mode_shapes: np.ndarray) -> int:
     """Lowest mode whose wing tips move axially in opposite phase and dominate the mode.
 
     The tetrahedral split of the grid is not mirror-symmetric, so "opposite phase" allows a
@@ -177,22 +247,29 @@ def reduce_counterweight(geometry: CounterweightGeometry, n_modes: int = 6) -> R
     """
     if n_modes < 1:
         raise InputError(f"number of CB modes must be at least 1, got {n_modes}")
-    mesh = counterweight_mesh(geometry)
+    geometry.validate()
+    if geometry.mesh_file is None:
+        mesh = counterweight_mesh(geometry)
+    else:
+        mesh, face = _file_mesh(geometry)
     body = assemble_elastic_body(mesh, geometry.youngs_modulus, geometry.poisson_ratio, geometry.density,
                                  quadratic=True)
     coordinates = body.coordinates
     n_nodes = coordinates.shape[0]
     if not np.array_equal(body.node_dofs, np.arange(3 * n_nodes).reshape(n_nodes, 3)):
         raise InputError("counterweight DOFs are not node-interleaved as exudyn requires")
-    tolerance = 1e-6 * geometry.width
-    interface_nodes = np.nonzero(np.abs(coordinates[:, 1]) < tolerance)[0]
+    if geometry.mesh_file is None:
+        tolerance = 1e-6 * geometry.width
+        interface_nodes = np.nonzero(np.abs(coordinates[:, 1]) < tolerance)[0]
+        tips = [(sign * 0.5 * geometry.width, geometry.height, 0.0) for sign in (-1.0, 1.0)]
+    else:
+        interface_nodes = _face_nodes(mesh, face, geometry)
+        tolerance = float(np.linalg.norm(np.ptp(coordinates, axis=0)))  # the nearest nodes, wherever they are
+        tips = wing_tip_points(coordinates)
     modes = floating_frame_modes(body, [interface_nodes], n_modes, reference_points=[[0.0, 0.0, 0.0]])
     mode_shapes = modes.basis
-    wing_tip_nodes = np.array([
-        _nodes_near(coordinates, (sign * 0.5 * geometry.width, geometry.height, 0.0), tolerance)
-        for sign in (-1.0, 1.0)
-    ])
-    torsion = _torsion_mode_index(mode_shapes[3 * wing_tip_nodes + 2, :], mode_shapes)
+    wing_tip_nodes = np.array([_nodes_near(coordinates, tip, tolerance) for tip in tips])
+    torsion = torsion_mode_index(mode_shapes[3 * wing_tip_nodes + 2, :], mode_shapes)
     ones = np.zeros((3 * n_nodes, 3))
     for j in range(3):
         ones[j::3, j] = 1.0

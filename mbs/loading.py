@@ -24,7 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mbs.histories import steady_part, wing_amplitude
+from mbs.counterweight import ReducedCounterweight
+from mbs.histories import RunHistories, steady_part, wing_amplitude
 from mbs.model import reduce_bodies, simulate
 from mbs.parameters import ModelParams
 from reduction.errors import InputError
@@ -42,9 +43,11 @@ class MultibodyLoading:
     mm/s²; angular_velocity, angular_acceleration (n, 3) rad/s, rad/s²; modal_coordinates,
     modal_velocities, modal_accelerations (n, m); wing_torsion (n,) mm. mesh_points (3, n_v),
     mesh_cells (4, n_t): the CW's linear tetrahedral mesh (P2 elements on it); mode_shapes
-    (3·n_nodes, m), node-interleaved in the P2 DOF order of that mesh. speed_rpm: engine speed.
-    geometry: the CW's width, height, thickness (mm); torsion_frequency_hz and torsion_mode: its
-    fixed-interface wing torsion mode; wall_time_s: of the multibody run.
+    (3·n_nodes, m), node-interleaved in the P2 DOF order of that mesh (m = 0, mesh empty: the
+    histories carry no modes). speed_rpm: engine speed.
+    geometry: the CW's width, height (outer face), thickness (mm); mode_frequencies_hz (m,):
+    fixed-interface eigenfrequencies; torsion_mode: index of its wing torsion mode; wall_time_s:
+    of the multibody run (0 for histories read from a file, :mod:`mbs.histories_file`).
     """
 
     speed_rpm: float
@@ -60,13 +63,18 @@ class MultibodyLoading:
     mesh_cells: np.ndarray
     mode_shapes: np.ndarray
     geometry: dict
-    torsion_frequency_hz: float
+    mode_frequencies_hz: np.ndarray
     torsion_mode: int
     wall_time_s: float
 
     @property
     def n_modes(self) -> int:
         return int(self.mode_shapes.shape[1])
+
+    @property
+    def torsion_frequency_hz(self) -> float:
+        """Fixed-interface frequency of the wing torsion mode, Hz."""
+        return float(self.mode_frequencies_hz[self.torsion_mode])
 
     @property
     def modes(self) -> ModeField:
@@ -96,10 +104,21 @@ def counterweight_loading(params: ModelParams, counterweight: int) -> MultibodyL
                          f"{params.n_counterweights} counterweights (1 … {params.n_counterweights})")
     reduced, reduced_throw = reduce_bodies(params)
     histories = simulate(params, reduced=reduced, reduced_throw=reduced_throw)
+    return run_loading(params, reduced, histories, counterweight)
+
+
+def run_loading(params: ModelParams, reduced: ReducedCounterweight, histories: RunHistories,
+                counterweight: int) -> MultibodyLoading:
+    """What CW ``counterweight`` (1 = first) of a finished run gives the contact model: the steady
+    part of its histories, its mesh and modes."""
     steady = steady_part(len(histories.time))
     c = counterweight - 1
     mesh = reduced.body.mesh
+    low, high = reduced.node_coordinates.min(axis=0), reduced.node_coordinates.max(axis=0)
     geometry = params.counterweight
+    size = ({"width": geometry.width, "height": geometry.height, "thickness": geometry.thickness}
+            if geometry.mesh_file is None else
+            {"width": float(high[0] - low[0]), "height": float(high[1]), "thickness": float(high[2] - low[2])})
     return MultibodyLoading(
         speed_rpm=params.speed_rpm,
         time=histories.time[steady].copy(),
@@ -113,8 +132,8 @@ def counterweight_loading(params: ModelParams, counterweight: int) -> MultibodyL
         mesh_points=np.asarray(mesh.p).copy(),
         mesh_cells=np.asarray(mesh.t).copy(),
         mode_shapes=np.asarray(reduced.mode_shapes).copy(),
-        geometry={"width": geometry.width, "height": geometry.height, "thickness": geometry.thickness},
-        torsion_frequency_hz=reduced.torsion_frequency,
+        geometry=size,
+        mode_frequencies_hz=np.asarray(reduced.eigenfrequencies, dtype=float).copy(),
         torsion_mode=int(reduced.torsion_mode),
         wall_time_s=histories.wall_time,
     )

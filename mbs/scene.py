@@ -8,6 +8,10 @@ sub-tables ``[mbs.counterweight]``, ``[mbs.throw]``, ``[mbs.excitation]``, ``[mb
 the fields of the dataclasses of the same meaning (units as documented there). Anything not
 given keeps its default; an unknown key is an error that names it.
 
+``[mbs.counterweight]`` may name the user's own CW mesh instead of the generated block:
+mesh_file (Abaqus .inp or Gmsh .msh, relative to the scene file, in the CW frame) and interface
+(its node set or surface of the bolted contact face); see :mod:`mbs.counterweight`.
+
 Instead of an order table, ``[mbs.gas_pressure]`` may give a cylinder-pressure curve:
 file = CSV with two columns (crank angle deg over 0..720, gauge pressure MPa; '#' comments),
 bore and conrod_length (mm), optional max_order; the order table is then computed by
@@ -16,6 +20,7 @@ mbs.excitation.gas_torque_from_pressure with the throw's crank radius.
 
 from __future__ import annotations
 
+import hashlib
 import tomllib
 from dataclasses import fields, replace
 from pathlib import Path
@@ -68,6 +73,17 @@ def _with_pressure_curve(params: ModelParams, table: dict, folder: Path, where: 
     return replace(params, excitation=excitation)
 
 
+def _with_mesh_digest(table: dict, folder: Path, where: str) -> dict:
+    """The counterweight table with its mesh file made absolute and its SHA-256 (cache key) added."""
+    if "mesh_digest" in table:
+        raise InputError(f"{where}: 'mesh_digest' is computed from the file, not given")
+    path = Path(table["mesh_file"])
+    path = path if path.is_absolute() else folder / path
+    if not path.is_file():
+        raise InputError(f"{where}: {path} does not exist")
+    return {**table, "mesh_file": str(path.resolve()), "mesh_digest": hashlib.sha256(path.read_bytes()).hexdigest()}
+
+
 def model_params_from_mapping(table: dict, where: str = "[mbs]", folder: Path = Path(".")) -> ModelParams:
     """ModelParams from a mapping shaped like the scene's [mbs] table (folder: base of relative files)."""
     table = dict(table)
@@ -81,6 +97,8 @@ def model_params_from_mapping(table: dict, where: str = "[mbs]", folder: Path = 
             if not isinstance(value, dict):
                 raise InputError(f"{where}.{name} must be a table")
             _checked(value, {f.name for f in fields(kind)}, f"{where}.{name}")
+            if name == "counterweight" and "mesh_file" in value:
+                value = _with_mesh_digest(value, folder, f"{where}.counterweight.mesh_file")
             values[name] = replace(kind(), **{k: _as_field_value(v) for k, v in value.items()})
         elif name == "effects":
             values[name] = frozenset(value)

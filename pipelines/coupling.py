@@ -48,7 +48,8 @@ class CouplingSettings:
     body: contact body that is the counterweight. counterweight: which CW of the multibody
     model (1 = journal-1 side of throw 1). cycle: "wing_period" or "revolution".
     wing_amplitude: mm, or None for the multibody amplitude at the engine speed.
-    fields: "all" or "wing_mode".
+    fields: "all" or "wing_mode". histories: an interface-histories file (relative to the scene)
+    read instead of running the multibody model (:mod:`mbs.histories_file`).
     """
 
     body: str
@@ -56,6 +57,7 @@ class CouplingSettings:
     cycle: str = "wing_period"
     wing_amplitude: float | None = None
     fields: str = "all"
+    histories: str | None = None
 
     @classmethod
     def of(cls, scene: Scene) -> "CouplingSettings":
@@ -80,17 +82,60 @@ class Coupled:
 
 
 def multibody_params(scene: Scene):
-    """mbs.ModelParams of a coupled scene: its [mbs] table with the scene's multibody effects."""
+    """mbs.ModelParams of a coupled scene: its [mbs] table with the scene's multibody effects.
+    A CW body read from a mesh file is the multibody CW too (:func:`_file_counterweight`)."""
     from mbs.scene import model_params_from_mapping
 
     table = dict(scene.section("mbs"))
     table["effects"] = sorted(set(scene.effects) & set(MULTIBODY_EFFECTS))
     base = scene.path.parent if scene.path else Path(".")
+    cw_table = _file_counterweight(scene, base)
+    if cw_table:
+        table["counterweight"] = {**table.get("counterweight", {}), **cw_table}
     return model_params_from_mapping(table, where="[mbs]", folder=base)
 
 
+def _file_counterweight(scene: Scene, base: Path) -> dict:
+    """[mbs.counterweight] keys that make the coupled body's mesh file the multibody CW: the file,
+    its contact face (the named set that selects the body's contact surface) and its material."""
+    name = scene.data["coupling"]["body"]
+    body = scene.data["bodies"][name]
+    if "file" not in body["mesh"]:
+        return {}
+    roles = [role for role in ("slave", "master") if scene.data["contact"][role]["body"] == name]
+    face = scene.data["contact"][roles[0]].get("set") if roles else None
+    if face is None:
+        raise InputError(f"'coupling.body' '{name}' is read from a mesh file, so the multibody model reduces that "
+                         f"mesh: select its contact surface by a named set ('contact.{(roles or ['slave'])[0]}.set'), "
+                         "which becomes the multibody interface")
+    material = scene.data["materials"][body["material"]]
+    path = Path(body["mesh"]["file"])
+    return {"mesh_file": str(path if path.is_absolute() else base / path), "interface": face,
+            "youngs_modulus": material["youngs_modulus"], "poisson_ratio": material["poisson_ratio"],
+            "density": material["density"]}
+
+
+def histories_path(scene: Scene) -> Path | None:
+    """The interface-histories file a coupled scene names (absolute), or None."""
+    name = scene.data["coupling"].get("histories")
+    if name is None:
+        return None
+    path = Path(name)
+    return path if path.is_absolute() or scene.path is None else scene.path.parent / path
+
+
 def multibody_loading(scene: Scene, cache: StageCache | None = None) -> MultibodyLoading:
-    """The multibody stage of a coupled scene (read from the cache when its inputs are unchanged)."""
+    """The multibody stage of a coupled scene (read from the cache when its inputs are unchanged),
+    or the scene's interface-histories file."""
+    path = histories_path(scene)
+    if path is not None:
+        from mbs.histories_file import read_interface_histories, to_loading
+        from pipelines.build import make_mesh
+
+        spec = scene.data["bodies"][scene.data["coupling"]["body"]]["mesh"]
+        cw_mesh = make_mesh(spec, f"bodies.{scene.data['coupling']['body']}.mesh",
+                            scene.path.parent if scene.path else None)[0]
+        return to_loading(read_interface_histories(path), cw_mesh)
     params = multibody_params(scene)
     counterweight = CouplingSettings.of(scene).counterweight
     cache = cache or StageCache(None)
@@ -98,13 +143,14 @@ def multibody_loading(scene: Scene, cache: StageCache | None = None) -> Multibod
                      lambda: counterweight_loading(params, counterweight))
 
 
-def _check_geometry(mesh, geometry: dict) -> None:
+def _check_geometry(mesh, loading: MultibodyLoading) -> None:
     """The contact CW must span the multibody CW's box in its frame (contact face y = 0)."""
+    if not loading.mesh_points.size:
+        return
     low, high = mesh.p.min(axis=1), mesh.p.max(axis=1)
-    expected_low = np.array([-0.5 * geometry["width"], 0.0, -0.5 * geometry["thickness"]])
-    expected_high = np.array([0.5 * geometry["width"], geometry["height"], 0.5 * geometry["thickness"]])
-    if not (np.allclose(low, expected_low, atol=1e-6 * geometry["width"])
-            and np.allclose(high, expected_high, atol=1e-6 * geometry["width"])):
+    expected_low, expected_high = loading.mesh_points.min(axis=1), loading.mesh_points.max(axis=1)
+    tolerance = 1e-6 * float(np.max(expected_high - expected_low))
+    if not (np.allclose(low, expected_low, atol=tolerance) and np.allclose(high, expected_high, atol=tolerance)):
         raise InputError(f"'coupling.body' mesh spans {low.round(3).tolist()} … {high.round(3).tolist()} mm, but "
                          f"the multibody counterweight spans {expected_low.tolist()} … {expected_high.tolist()} mm "
                          "in its frame (contact face y = 0): give both the same geometry ([mbs.counterweight])")
@@ -112,7 +158,10 @@ def _check_geometry(mesh, geometry: dict) -> None:
 
 def coupled_patterns(scene: Scene, elastic, mesh, loading: MultibodyLoading) -> dict:
     """The CW's unit inertia patterns (N per unit history value) that the scene's effects call for."""
-    _check_geometry(mesh, loading.geometry)
+    _check_geometry(mesh, loading)
+    if not loading.n_modes and "flexible_counterweight" in scene.effects:
+        raise InputError("effect 'flexible_counterweight' needs the CW's modal coordinates and mode shapes, which "
+                         "the interface histories do not hold")
     if CouplingSettings.of(scene).fields == "wing_mode":
         patterns = {}
         if "centrifugal" in scene.effects:
@@ -120,7 +169,7 @@ def coupled_patterns(scene: Scene, elastic, mesh, loading: MultibodyLoading) -> 
                 elastic, [loading.frame_acceleration[:, k].mean() for k in range(3)],
                 float(np.mean(loading.angular_velocity[:, 2] ** 2)))
         if "flexible_counterweight" in scene.effects:
-            face = np.flatnonzero(np.abs(mesh.p[1]) < 1e-6 * loading.geometry["height"])
+            face = np.flatnonzero(np.abs(mesh.p[1]) < 1e-6 * float(np.ptp(mesh.p, axis=1).max()))
             patterns["wing_mode"] = modal_loads.wing_mode_pattern(elastic, loading.modes, loading.torsion_mode,
                                                                   loading.torsion_frequency_hz, face)
         return patterns

@@ -80,6 +80,8 @@ def inertia_patterns(body: ElasticBody, modes: ModeField) -> dict[str, np.ndarra
         patterns[f"frame_a{axis}"] = rigid_body_inertia(body, unit)
         patterns[f"alpha_{axis}"] = rigid_body_inertia(body, np.zeros(3), unit)
     patterns["spin_squared"] = rigid_body_inertia(body, np.zeros(3), None, _SPIN_AXIS)
+    if modes.n_modes == 0:  # histories without modes: the rigid-body fields only
+        return patterns
     shapes = interpolate_modes(modes, body.coordinates)  # (n_nodes, 3, m)
     field = np.zeros((body.n_dofs, modes.n_modes))
     field[body.node_dofs.ravel()] = shapes.reshape(-1, modes.n_modes)

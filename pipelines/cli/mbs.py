@@ -2,8 +2,10 @@
 
 `fretwork sweep SCENE.toml --speeds 500:800:10 [--json] [--scheduler tcp://HOST:PORT] [--workers N]`:
 engine-speed sweep, the speeds as parallel dask cases (add_sweep_parser / run_sweep).
-`fretwork mbs SCENE.toml [--out DIR] [--json]`: one run at the scene's speed with HDF5 histories,
-spectra, Campbell diagram and plots (add_run_parser / run_single). The lead's CLI registers them
+`fretwork mbs SCENE.toml [--out DIR] [--json] [--interface-histories FILE [--counterweight N]]`: one
+run at the scene's speed with HDF5 histories, spectra, Campbell diagram and plots, and optionally
+one CW's interface histories (mbs.histories_file; .h5 or .csv) for a scene's
+'coupling.histories' (add_run_parser / run_single). The lead's CLI registers them
 and calls args.handler(args). Summaries go to stdout (JSON with --json), progress bars to stderr.
 """
 
@@ -43,6 +45,23 @@ def model_params(path) -> ModelParams:
         raise InputError(f"{path} has no [mbs] table: it does not describe a multibody model "
                          "(an empty [mbs] table runs the default generic engine)")
     return multibody_params(scene)
+
+
+def _counterweight(args, params: ModelParams) -> int:
+    """The CW whose interface histories `fretwork mbs` writes (checked when they are asked for)."""
+    counterweight = args.counterweight
+    if counterweight is None:
+        try:
+            table = tomllib.loads(Path(args.scene).read_text()).get("coupling", {})
+        except (OSError, tomllib.TOMLDecodeError):
+            table = {}
+        counterweight = table.get("counterweight", 1) if isinstance(table, dict) else 1
+    if not isinstance(counterweight, int) or not 1 <= counterweight <= params.n_counterweights:
+        raise InputError(f"--counterweight is {counterweight!r}, but the multibody model has "
+                         f"{params.n_counterweights} counterweights (1 … {params.n_counterweights})")
+    if args.interface_histories and Path(args.interface_histories).suffix.lower() not in (".h5", ".hdf5", ".csv"):
+        raise InputError(f"--interface-histories {args.interface_histories}: the file must end in .h5, .hdf5 or .csv")
+    return counterweight
 
 
 def add_sweep_parser(subparsers):
@@ -107,6 +126,12 @@ def add_run_parser(subparsers):
     parser.add_argument("scene", help="scene TOML file (its [mbs] table sets the model)")
     parser.add_argument("--out", default="results/mbs", help="output folder (default: %(default)s)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
+    parser.add_argument("--interface-histories", default=None, metavar="FILE",
+                        help="also write one CW's interface histories (.h5 or .csv, docs/histories_format.md), "
+                             "the steady half of the run")
+    parser.add_argument("--counterweight", type=int, default=None,
+                        help="which CW's interface histories (1 = first; default: the scene's "
+                             "'coupling.counterweight', else 1)")
     parser.set_defaults(handler=run_single)
     return parser
 
@@ -115,6 +140,7 @@ def run_single(args) -> int:
     """One run; 0 on success, 1 if the time integration failed, 2 on bad input."""
     try:
         params = model_params(args.scene)
+        counterweight = _counterweight(args, params)
     except InputError as error:
         print(f"fretwork mbs: {error}", file=sys.stderr)
         return 2
@@ -124,6 +150,13 @@ def run_single(args) -> int:
         print(f"fretwork mbs: {error}", file=sys.stderr)
         return 1
     histories = outputs.histories
+    interface = None
+    if args.interface_histories:
+        from mbs.histories_file import from_loading, write_interface_histories
+        from mbs.loading import run_loading
+
+        loading = run_loading(params, outputs.reduced, histories, counterweight)
+        interface = str(write_interface_histories(args.interface_histories, from_loading(loading)))
     summary = {
         "file": str(outputs.results_file),
         "plots": {name: str(path) for name, path in outputs.plots.items()},
@@ -134,6 +167,9 @@ def run_single(args) -> int:
         "time_step_s": params.solver.time_step,
         "cb_modes": params.n_modes,
     }
+    if interface is not None:
+        summary["interface_histories"] = interface
+        summary["counterweight"] = counterweight
     if args.json:
         print(json.dumps(summary, indent=2))
     else:

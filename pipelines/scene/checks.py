@@ -114,6 +114,9 @@ def _check_effects(data, problems):
                             "(the coupling loads it with its inertia)")
         if data["scene"]["dimension"] != 3:
             problems.append("a scene with [coupling] must be 3D ('scene.dimension' = 3)")
+        if "histories" in coupling and set(data["scene"]["effects"]) & set(MULTIBODY_EFFECTS):
+            problems.append("'coupling.histories' replaces the multibody run: remove the multibody effects "
+                            f"{sorted(set(data['scene']['effects']) & set(MULTIBODY_EFFECTS))} from 'scene.effects'")
         mbs_effects = data.get("mbs", {}).get("effects") if isinstance(data.get("mbs"), dict) else None
         if mbs_effects is not None:
             problems.append("'mbs.effects' is set by 'scene.effects' in a coupled scene: list the multibody "

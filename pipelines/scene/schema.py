@@ -116,6 +116,8 @@ SCHEMA = {
         "wing_amplitude": (NUMBER, False, _positive, "wing vibration amplitude, mm (default: from the multibody run)"),
         "fields": (str, False, lambda v: None if v in ("all", "wing_mode") else "must be 'all' or 'wing_mode'",
                    "which inertia fields load the CW"),
+        "histories": (str, False, None, "interface-histories file (.h5 or .csv, docs/histories_format.md) read "
+                      "instead of running the multibody model"),
     },
     "procedure": {
         "preload_increments": (int, False, _integer_at_least(1), "increments of the preload"),
