@@ -104,7 +104,7 @@ def _body(scene: Scene, name: str, spec: dict, mesh, sets) -> Body:
     dim = scene.dimension
     material = scene.data["materials"][spec["material"]]
     elastic = assemble_elastic_body(mesh, material["youngs_modulus"], material["poisson_ratio"],
-                                    material.get("density"))
+                                    material.get("density"), quadratic=bool(sets is not None and sets.serendipity))
     fixed = spec.get("fixed")
     fixed_nodes = (select_nodes(mesh, fixed["nodes"], f"bodies.{name}.fixed.nodes", sets) if fixed
                    else np.zeros(0, int))

@@ -30,6 +30,7 @@ _QUADRATIC_ELEMENTS = {
     skfem.MeshTet1: skfem.ElementTetP2,
     skfem.MeshTri2: skfem.ElementTriP2,
     skfem.MeshTet2: skfem.ElementTetP2,
+    skfem.MeshHex1: skfem.ElementHexS2,  # 20-node serendipity hexahedra (Hex20 files)
 }
 
 

@@ -1,10 +1,14 @@
 """Volume meshes in: meshio files (Abaqus .inp, Gmsh .msh, ...) and scikit-fem meshes.
 
 A ``MeshModel`` holds the scikit-fem mesh with its named node sets and element sets.
-Supported solid cells: Tet4, Hex8, Tet10 (3D); Tri3, Quad4 (2D, plane strain). Node sets come
-from Abaqus *NSET, Gmsh physical groups of lower dimension (nodes of those faces/edges) and
-scikit-fem boundaries; element sets from *ELSET, volume physical groups and subdomains.
-Coordinates in mm.
+Supported solid cells: Tet4, Hex8, Tet10, Hex20 (3D); Tri3, Quad4 (2D, plane strain). Hex20 files
+become the trilinear mesh of their corners carrying 20-node serendipity elements
+(``MeshModel.quadratic``): their mid-edge nodes must lie at the edge midpoints. Node sets come
+from Abaqus *NSET, Abaqus *SURFACE blocks (element faces ``ELSET, S1`` … or node-based; meshio
+drops them, :mod:`reduction.mesh.abaqus` reads them: the nodes of their faces), Gmsh physical
+groups of lower dimension (nodes of those faces/edges) and scikit-fem boundaries; element sets
+from *ELSET, volume physical groups and subdomains. For Hex20 meshes node sets keep their
+corner nodes. Coordinates in mm.
 """
 
 from __future__ import annotations
@@ -26,10 +30,11 @@ _SOLID_CELLS = {
     "tetra": (skfem.MeshTet1, 3),
     "hexahedron": (skfem.MeshHex1, 3),
     "tetra10": (skfem.MeshTet2, 3),
+    "hexahedron20": (skfem.MeshHex1, 3),
     "triangle": (skfem.MeshTri1, 2),
     "quad": (skfem.MeshQuad1, 2),
 }
-_UNSUPPORTED_SOLIDS = {"wedge", "wedge15", "pyramid", "pyramid13", "hexahedron20", "hexahedron27",
+_UNSUPPORTED_SOLIDS = {"wedge", "wedge15", "pyramid", "pyramid13", "hexahedron27",
                        "triangle6", "quad8", "quad9"}
 _SURFACE_CELLS = {"triangle", "quad", "triangle6", "quad8", "quad9", "line", "line3", "vertex"}
 
@@ -52,9 +57,12 @@ class MeshModel:
     element_sets: dict[str, np.ndarray] = field(default_factory=dict)
     source: str = "scikit-fem"
 
+    serendipity: bool = False
+
     @property
     def quadratic(self) -> bool:
-        return isinstance(self.mesh, skfem.MeshTet2)
+        """Quadratic elements: Tet10 (a MeshTet2) or Hex20 (serendipity elements on the corner mesh)."""
+        return isinstance(self.mesh, skfem.MeshTet2) or self.serendipity
 
     def node_set(self, name: str) -> np.ndarray:
         if name not in self.node_sets:
@@ -109,7 +117,24 @@ def read_mesh(path) -> MeshModel:
         raw = meshio.read(path)
     except Exception as error:  # meshio raises bare exceptions of many kinds for bad files
         raise InputError(f"{path}: meshio cannot read it ({error})") from error
-    return from_meshio(raw, source=str(path))
+    model = from_meshio(raw, source=str(path))
+    if path.suffix.lower() == ".inp":
+        from reduction.mesh.abaqus import read_surfaces
+
+        compact = _file_to_mesh_nodes(raw, model)
+        for name, nodes in read_surfaces(path).items():
+            model.node_sets.setdefault(name, _compact(compact, nodes))
+    return model
+
+
+def _file_to_mesh_nodes(raw: meshio.Mesh, model: MeshModel) -> np.ndarray:
+    """Map from the file's point order to ``model.points`` (-1: not a node of the solid mesh)."""
+    from scipy.spatial import cKDTree
+
+    points = np.asarray(raw.points, dtype=float)[:, :model.points.shape[1]]
+    distance, index = cKDTree(model.points).query(points)
+    span = float(np.ptp(model.points, axis=0).max()) or 1.0
+    return np.where(distance <= 1e-9 * span, index, -1)
 
 
 def from_meshio(raw: meshio.Mesh, source: str = "meshio mesh") -> MeshModel:
@@ -125,8 +150,16 @@ def from_meshio(raw: meshio.Mesh, source: str = "meshio mesh") -> MeshModel:
     compact = np.full(len(raw.points), -1, dtype=np.int64)
     compact[used] = np.arange(used.size)
     points = np.ascontiguousarray(points[used])
+    serendipity = cell_type == "hexahedron20"
+    if serendipity:  # the corner mesh carries the 20-node elements; sets keep corner nodes
+        _check_straight_hex20(np.asarray(raw.points, dtype=float)[:, :dim], cells, source)
+        cells = cells[:, :8]
+        used = np.unique(cells)
+        compact = np.full(len(raw.points), -1, dtype=np.int64)
+        compact[used] = np.arange(used.size)
+        points = np.ascontiguousarray(np.asarray(raw.points, dtype=float)[used, :dim])
     t = compact[cells].T
-    if cell_type == "hexahedron":
+    if cell_type in ("hexahedron", "hexahedron20"):
         t = t[INV_HEX_MAPPING[:8]]
     mesh = mesh_type(points.T, np.ascontiguousarray(t))
 
@@ -141,7 +174,24 @@ def from_meshio(raw: meshio.Mesh, source: str = "meshio mesh") -> MeshModel:
         if surface_nodes:
             node_sets[name] = _compact(compact, np.concatenate(surface_nodes))
     _gmsh_physical_groups(raw, cell_type, dim, compact, node_sets, element_sets)
-    return MeshModel(mesh=mesh, points=points, node_sets=node_sets, element_sets=element_sets, source=source)
+    return MeshModel(mesh=mesh, points=points, node_sets=node_sets, element_sets=element_sets, source=source,
+                     serendipity=serendipity)
+
+
+# mid-edge nodes 8 … 19 of a meshio/Abaqus hexahedron20 and the corners of their edges
+_HEX20_EDGES = np.array([[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4],
+                         [0, 4], [1, 5], [2, 6], [3, 7]])
+
+
+def _check_straight_hex20(points: np.ndarray, cells: np.ndarray, source: str) -> None:
+    """The serendipity elements on the corner mesh put mid-edge nodes at the edge midpoints."""
+    midpoints = 0.5 * (points[cells[:, _HEX20_EDGES[:, 0]]] + points[cells[:, _HEX20_EDGES[:, 1]]])
+    offset = np.linalg.norm(points[cells[:, 8:20]] - midpoints, axis=-1)
+    length = np.linalg.norm(points[cells[:, _HEX20_EDGES[:, 1]]] - points[cells[:, _HEX20_EDGES[:, 0]]], axis=-1)
+    bad = np.flatnonzero(np.any(offset > 1e-6 * length, axis=1))
+    if bad.size:
+        raise InputError(f"{source}: {bad.size} hexahedron20 elements have curved edges (mid-edge node off the "
+                         f"edge midpoint), first element index {bad[0]}; only straight-edged Hex20 are supported")
 
 
 def _compact(compact: np.ndarray, file_indices) -> np.ndarray:
@@ -152,10 +202,11 @@ def _compact(compact: np.ndarray, file_indices) -> np.ndarray:
 def _solid_type(raw: meshio.Mesh, source: str) -> str:
     kinds = {block.type for block in raw.cells}
     unsupported = sorted(kinds & _UNSUPPORTED_SOLIDS - _SURFACE_CELLS)
-    solids3d = sorted(kinds & {"tetra", "hexahedron", "tetra10"})
+    solids3d = sorted(kinds & {"tetra", "hexahedron", "tetra10", "hexahedron20"})
     if unsupported:
         raise InputError(f"{source}: unsupported cell type(s) {', '.join(unsupported)}; "
-                         "supported: tetra (Tet4), hexahedron (Hex8), tetra10 (Tet10), triangle, quad")
+                         "supported: tetra (Tet4), hexahedron (Hex8), tetra10 (Tet10), hexahedron20 (Hex20), "
+                         "triangle, quad")
     if len(solids3d) > 1:
         raise InputError(f"{source}: mixed solid cell types {', '.join(solids3d)} in one body are not supported")
     if solids3d:
@@ -172,7 +223,7 @@ def _signed_measures(points: np.ndarray, cells: np.ndarray, cell_type: str) -> n
     """Per element, the smallest signed corner volume (3D) or area (2D); positive when well ordered."""
     if cell_type in ("tetra", "tetra10"):
         corners = np.array([[0, 1, 2, 3]])
-    elif cell_type == "hexahedron":
+    elif cell_type in ("hexahedron", "hexahedron20"):
         corners = _HEX_CORNERS
     elif cell_type == "triangle":
         corners = np.array([[0, 1, 2]])
@@ -202,7 +253,7 @@ def _gmsh_physical_groups(raw, cell_type, dim, compact, node_sets, element_sets)
         return
     solid_offset = 0
     for block, tags in zip(raw.cells, physical):
-        block_dim = 3 if block.type in ("tetra", "hexahedron", "tetra10") else \
+        block_dim = 3 if block.type in ("tetra", "hexahedron", "tetra10", "hexahedron20") else \
             2 if block.type in ("triangle", "quad", "triangle6", "quad8", "quad9") else \
             1 if block.type in ("line", "line3") else 0
         for name, (tag, group_dim) in ((n, v[:2]) for n, v in raw.field_data.items()):
