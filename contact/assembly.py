@@ -40,7 +40,9 @@ class Body:
     """One elastic body of a contact model.
 
     fixed_nodes: node indices whose displacement components ``fixed_components`` are held at
-    zero (e.g. the bottom of a plane specimen). reference_points: name → ReferencePoint.
+    zero (e.g. the bottom of a plane specimen); supports: further (node indices, components)
+    pairs held at zero (e.g. a symmetry plane, which may cut the contact surface: its contact
+    DOFs are then held in the condensed model). reference_points: name → ReferencePoint.
     body_loads: pattern name → nodal force vector (n_dofs,) N at unit amplitude (gravity,
     centrifugal or inertia loads); condensed exactly with the body.
     """
@@ -51,6 +53,14 @@ class Body:
     fixed_components: tuple[int, ...] = (0, 1)
     reference_points: dict = field(default_factory=dict)
     body_loads: dict = field(default_factory=dict)
+    supports: tuple = ()
+
+    def held_dofs(self) -> np.ndarray:
+        """Sorted DOFs (of ``elastic``) held at zero by all the body's supports."""
+        pairs = ((self.fixed_nodes, self.fixed_components),) + tuple(self.supports)
+        held = [self.elastic.node_dofs[np.asarray(nodes, dtype=int)][:, list(components)].ravel()
+                for nodes, components in pairs if len(nodes)]
+        return np.unique(np.concatenate(held)) if held else np.zeros(0, dtype=int)
 
 
 @dataclass(frozen=True)
@@ -62,6 +72,7 @@ class CondensedBody:
     condensation: Condensation
     offset: int
     reference_dofs: dict  # reference point name → global indices of its DOFs
+    held: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))  # global contact DOFs held at 0
 
     @property
     def size(self) -> int:
@@ -119,13 +130,14 @@ def _condense_body(body: Body, surface: Surface | None, offset: int) -> Condense
     reference = [] if coupling is None else [np.atleast_2d(coupling.reference_dofs)[k]
                                              for k in range(len(names))]
     retained = np.concatenate([surface_dofs] + reference).astype(int)
-    fixed = np.zeros(0, dtype=int)
-    if len(body.fixed_nodes):
-        fixed = kept[elastic.node_dofs[np.asarray(body.fixed_nodes)][:, list(body.fixed_components)]].ravel()
-        if np.any(fixed < 0):
-            raise InputError(f"body {body.name}: fixed nodes overlap a reference-point coupling")
-        if np.intersect1d(fixed, retained).size:
-            raise InputError(f"body {body.name}: fixed nodes overlap the contact surface")
+    fixed = kept[body.held_dofs()]
+    if np.any(fixed < 0):
+        raise InputError(f"body {body.name}: fixed nodes overlap a reference-point coupling")
+    # held DOFs of the contact surface (a symmetry plane through it) stay retained and are held
+    # in the condensed model: the same as holding them before condensing
+    on_surface = np.isin(fixed, surface_dofs)
+    held = offset + np.flatnonzero(np.isin(retained, fixed[on_surface]))
+    fixed = fixed[~on_surface]
     loads = {name: vector if coupling is None else coupling.reduce_vector(vector)
              for name, vector in body.body_loads.items()}
     condensation = condense(stiffness, retained, fixed, loads or None)
@@ -133,7 +145,7 @@ def _condense_body(body: Body, surface: Surface | None, offset: int) -> Condense
     for name, dofs in zip(names, reference):
         reference_dofs[name] = np.arange(start, start + dofs.size)
         start += dofs.size
-    return CondensedBody(body, coupling, condensation, offset, reference_dofs)
+    return CondensedBody(body, coupling, condensation, offset, reference_dofs, held)
 
 
 def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, np.ndarray], *,
@@ -161,6 +173,7 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     labels = _reference_labels(condensed, dim)
 
     load_vectors, motion_vectors, prescribed = control_patterns(labels, n, loads, motions)
+    prescribed = np.union1d(prescribed, np.concatenate([item.held for item in condensed.values()])).astype(int)
     bolt_set = _add_bolt_patterns(bolts, labels, n, load_vectors) if bolts else None
     _add_body_loads(condensed, n, load_vectors)
     structure = Structure(stiffness=stiffness, contact_operator=G, area=pairing.area,

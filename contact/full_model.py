@@ -125,8 +125,8 @@ def _body_block(body: Body, surface: Surface | None, offset: int):
         raise InputError(f"body {body.name}: the contact surface shares nodes with a "
                          "reference-point coupling; couple a different node set")
     fixed = None
-    if len(body.fixed_nodes):
-        fixed = kept[elastic.node_dofs[np.asarray(body.fixed_nodes)][:, list(body.fixed_components)]].ravel()
+    if body.held_dofs().size:
+        fixed = kept[body.held_dofs()]
         if np.any(fixed < 0):
             raise InputError(f"body {body.name}: fixed nodes overlap a reference-point coupling")
         fixed = offset + fixed

@@ -105,16 +105,17 @@ def _body(scene: Scene, name: str, spec: dict, mesh, sets) -> Body:
     material = scene.data["materials"][spec["material"]]
     elastic = assemble_elastic_body(mesh, material["youngs_modulus"], material["poisson_ratio"],
                                     material.get("density"), quadratic=bool(sets is not None and sets.serendipity))
-    fixed = spec.get("fixed")
-    fixed_nodes = (select_nodes(mesh, fixed["nodes"], f"bodies.{name}.fixed.nodes", sets) if fixed
-                   else np.zeros(0, int))
-    components = tuple(COMPONENTS[c] for c in (fixed or {}).get("components", ["ux", "uy", "uz"][:dim]))
+    fixed = spec.get("fixed", [])
+    tables = [("fixed", fixed)] if isinstance(fixed, dict) else [(f"fixed[{k}]", t) for k, t in enumerate(fixed)]
+    supports = [(select_nodes(mesh, table["nodes"], f"bodies.{name}.{where}.nodes", sets),
+                 tuple(COMPONENTS[c] for c in table.get("components", ["ux", "uy", "uz"][:dim])))
+                for where, table in tables]
     references = {}
     for ref_name, ref in spec.get("reference_points", {}).items():
         nodes = select_nodes(mesh, ref["nodes"], f"bodies.{name}.reference_points.{ref_name}.nodes", sets)
         references[ref_name] = ReferencePoint(nodes, np.asarray(ref["position"], float),
                                               bool(ref.get("rotations", False)))
-    return Body(name, elastic, fixed_nodes, components, references, _body_loads(scene, name, elastic))
+    return Body(name, elastic, np.zeros(0, int), (), references, _body_loads(scene, name, elastic), tuple(supports))
 
 
 def _control_patterns(scene: Scene, kind: str) -> dict:

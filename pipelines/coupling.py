@@ -110,7 +110,7 @@ def _file_counterweight(scene: Scene, base: Path) -> dict:
                          "which becomes the multibody interface")
     material = scene.data["materials"][body["material"]]
     path = Path(body["mesh"]["file"])
-    return {"mesh_file": str(path if path.is_absolute() else base / path), "interface": face,
+    return {"mesh_file": str((base / path).resolve()), "interface": face,
             "youngs_modulus": material["youngs_modulus"], "poisson_ratio": material["poisson_ratio"],
             "density": material["density"]}
 

@@ -143,16 +143,19 @@ def _check_bodies(data, problems):
                         problems.append(f"'bodies.{name}.mesh.{key}' must be a positive number (mm or count)")
         elif "file" not in mesh:
             problems.append(f"'bodies.{name}.mesh' needs 'generator' or 'file'")
-        if "fixed" in body:
-            fixed = body["fixed"]
-            if "nodes" not in fixed:
-                problems.append(f"'bodies.{name}.fixed.nodes' is missing (a selection)")
+        fixed = body.get("fixed", [])
+        for where, table in ([("fixed", fixed)] if isinstance(fixed, dict) else
+                             [(f"fixed[{k}]", table) for k, table in enumerate(fixed)]):
+            if not isinstance(table, dict):
+                problems.append(f"'bodies.{name}.{where}' must be a table {{ nodes = selection, components = [...] }}")
+            elif "nodes" not in table:
+                problems.append(f"'bodies.{name}.{where}.nodes' is missing (a selection)")
             else:
-                _check_selection(fixed["nodes"], f"bodies.{name}.fixed.nodes", dim, problems)
-            components = fixed.get("components", [])
+                _check_selection(table["nodes"], f"bodies.{name}.{where}.nodes", dim, problems)
+            components = table.get("components", []) if isinstance(table, dict) else []
             for comp in components if isinstance(components, list) else [components]:
                 if comp not in ("ux", "uy", "uz")[:dim]:
-                    problems.append(f"'bodies.{name}.fixed.components' has '{comp}'; use ux, uy{', uz' if dim == 3 else ''}")
+                    problems.append(f"'bodies.{name}.{where}.components' has '{comp}'; use ux, uy{', uz' if dim == 3 else ''}")
         for ref_name, ref in body.get("reference_points", {}).items():
             where = f"bodies.{name}.reference_points.{ref_name}"
             if not isinstance(ref, dict):

@@ -77,7 +77,8 @@ SCHEMA = {
     "bodies.*": {
         "material": (str, True, None, "name of a [materials] entry"),
         "mesh": (dict, True, None, "{ generator = ..., ... } or { file = ... }"),
-        "fixed": (dict, False, None, "{ nodes = selection, components = [...] }"),
+        "fixed": ((dict, list), False, None, "{ nodes = selection, components = [...] }, or a list of such "
+                  "supports ([[bodies.NAME.fixed]]), e.g. a base and a symmetry plane"),
         "reference_points": (dict, False, None, "named control points"),
     },
     "bolts.*": {
