@@ -25,6 +25,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from reduction.errors import InputError
+
 # Dunavant's 7-point rule on a triangle, exact to degree 5: barycentric (a, b) and weight.
 _R15 = np.sqrt(15.0)
 _A1, _A2 = (6.0 - _R15) / 21.0, (6.0 + _R15) / 21.0
@@ -234,6 +236,9 @@ def dual_coefficients(coordinates: np.ndarray, facets: np.ndarray) -> np.ndarray
 
 def mortar_segments(slave, master) -> MortarSegments:
     """All mortar segments of two surfaces (same dimension), as quadrature points."""
+    if not _candidates(slave, master)[0].size:
+        raise InputError("the contact surfaces touch nothing of each other: no master facet faces a slave facet "
+                         "within reach; check the contact selections (slave and master must face each other)")
     return _segments_2d(slave, master) if slave.dim == 2 else _segments_3d(slave, master)
 
 
