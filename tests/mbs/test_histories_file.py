@@ -5,7 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mbs.histories_file import (InterfaceHistories, read_interface_histories, write_interface_histories)
+from mbs.histories_file import (
+    InterfaceHistories,
+    read_interface_histories,
+    write_interface_histories,
+)
 from reduction.errors import InputError
 
 

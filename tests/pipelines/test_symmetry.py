@@ -71,7 +71,7 @@ SYMMETRY = '[[bodies.{body}.fixed]]\nnodes = {{ box = [[0.0, -8.0, -4.0], [0.0, 
 
 def _block(path, x0, x1, y, z0, z1, size=2.0):
     """A hexahedral block (Abaqus C3D8) of cubes of ``size`` mm."""
-    count = lambda a, b: int(round((b - a) / size)) + 1
+    count = lambda a, b: round((b - a) / size) + 1
     mesh = skfem.MeshHex.init_tensor(np.linspace(x0, x1, count(x0, x1)), np.linspace(-y, y, count(-y, y)),
                                      np.linspace(z0, z1, count(z0, z1)))
     meshio.write(path, meshio.Mesh(mesh.p.T, [("hexahedron", mesh.t.T[:, [0, 2, 4, 1, 3, 6, 7, 5]])]))

@@ -11,7 +11,12 @@ import meshio
 import numpy as np
 import pytest
 
-from mbs.histories_file import from_loading, read_interface_histories, to_loading, write_interface_histories
+from mbs.histories_file import (
+    from_loading,
+    read_interface_histories,
+    to_loading,
+    write_interface_histories,
+)
 from pipelines import scene as scenes
 from pipelines.cli.main import main
 from pipelines.coupling import multibody_loading
