@@ -192,6 +192,7 @@ class Snapshot:
     equilibrium: Equilibrium
     history: list
     jump: float = 1.0
+    loosening_at: float | None = None
 
 
 class _Run:
@@ -211,6 +212,7 @@ class _Run:
         self.jump_settings = AdaptiveJump(tolerance=procedure.jump_tolerance, maximum=procedure.max_cycle_jump)
         self.jump = self.jump_settings.initial if self.adaptive else float(procedure.cycle_jump)
         self._local_stiffness = None
+        self.loosening_at: float | None = None  # real cycles when loosening first became evident
 
     def bolt_forces(self):
         return None if self.bolts is None else self.bolts.forces(self.solver.space, self.equilibrium)
@@ -267,6 +269,7 @@ class _Run:
         self.cycle_number, self.first_phase = snapshot.cycle_number, snapshot.phase_index
         self.done_in_phase, self.quiet_cycles = snapshot.cycles_in_phase, snapshot.quiet_cycles
         self.equivalent, self.jump = snapshot.equivalent, snapshot.jump
+        self.loosening_at = snapshot.loosening_at
         if self.bolts is not None:
             self.lock(snapshot.locked_elongation)
 
@@ -331,9 +334,10 @@ class _Run:
             loosening = False
             if self.quiet_cycles >= self.procedure.stationary_window:
                 self.stationary = True
-            elif (phase == "wear" and self.procedure.stop_at_loosening
-                  and loosening_evident(self.history, self.procedure)):
-                loosening = True
+            elif phase == "wear" and loosening_evident(self.history, self.procedure):
+                loosening = self.procedure.stop_at_loosening
+                if self.loosening_at is None:
+                    self.loosening_at = self.equivalent
             if checkpoint_every and self.cycle_number % checkpoint_every == 0:
                 self.solver.forget_cached_factorisations()
                 if checkpoint is not None and not (self.stationary or loosening or count + 1 == n_cycles):
@@ -362,7 +366,8 @@ class _Run:
         return Snapshot(self.cycle_number, phase_index, cycles_in_phase, self.quiet_cycles, self.equivalent,
                         self.nominal_area, self.initial_clamp,
                         None if self.bolts is None else self.bolts.locked_elongation,
-                        self.cof_initial, self.state, self.equilibrium, list(self.history), self.jump)
+                        self.cof_initial, self.state, self.equilibrium, list(self.history), self.jump,
+                        self.loosening_at)
 
     def result(self, stopped_early: bool) -> RunResult:
         if not self.history:
@@ -371,6 +376,10 @@ class _Run:
         figures["cycles_run"] = self.cycle_number
         figures["equivalent_cycles"] = self.equivalent
         figures["nominal_contact_area"] = self.nominal_area
+        if self.stationary:
+            figures["shakedown_at_cycles"] = self.equivalent
+        if self.loosening_at is not None:
+            figures["loosening_evident_at_cycles"] = self.loosening_at
         if self.bolts is not None:
             final_clamp = self.history[-1].clamp_force
             figures["bolt_force_initial_N"] = self.initial_clamp

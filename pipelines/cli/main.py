@@ -67,6 +67,13 @@ def _human_summary(outcome) -> str:
     if s.get("bolt_force_initial_N") is not None:
         lines.append(f"  clamp force {s['bolt_force_initial_N'] / 1e3:.4g} kN -> {s['bolt_force_final_N'] / 1e3:.4g} kN "
                      f"({100 * s['clamp_force_loss_fraction']:.2f} % loss)")
+    if s.get("equivalent_engine_hours") is not None:
+        when = [f"{what} after {s[key + '_cycles']:.3g} cycles ({s[key + '_engine_hours']:.3g} h)"
+                for what, key in (("shakedown", "shakedown_at"), ("loosening evident", "loosening_evident_at"))
+                if s.get(key + "_engine_hours") is not None]
+        lines.append(f"  the run stands for {s['equivalent_cycles']:.3g} real load cycles, "
+                     f"{s['equivalent_engine_hours']:.3g} engine hours at {s['engine_speed_rpm']:.0f} rpm"
+                     + (f"; {', '.join(when)}" if when else ""))
     if s.get("min_stick_margin") is not None:
         lines.append(f"  smallest safety margin of stuck points: {s['min_stick_margin']:.3f}")
     if s.get("fdp_max_MPa_mm") is not None:

@@ -133,9 +133,22 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
                    {"sliding": "small", "sliding_mode": "small", "pairing": model.assembly.pairing.method})
     if model.coupling is not None:
         summary.update(model.coupling.summary())
+        summary.update(_engine_hours(summary))
     if writer.snapshot is not None:
         summary["resumed_from_cycle"] = writer.snapshot.cycle_number
     return Outcome(summary, path, written, stage_times)
+
+
+def _engine_hours(summary: dict) -> dict:
+    """The run's real-cycle counts as hours of engine running (one load cycle lasts
+    1/load_cycle_frequency_hz s): ``equivalent_engine_hours`` and, where the run says when,
+    ``shakedown_at_engine_hours`` and ``loosening_evident_at_engine_hours``."""
+    frequency = summary.get("load_cycle_frequency_hz")
+    if not frequency:
+        return {}
+    return {key.replace("cycles", "engine_hours"): summary[key] / frequency / 3600.0
+            for key in ("equivalent_cycles", "shakedown_at_cycles", "loosening_evident_at_cycles")
+            if summary.get(key) is not None}
 
 
 def run_scene(scene: Scene, out_dir: str | Path, *, progress: bool = True, plots: bool = True,

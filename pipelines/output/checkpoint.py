@@ -40,7 +40,7 @@ def write_snapshot(group: h5py.Group, snapshot: Snapshot, meter) -> None:
     """Store ``snapshot`` and the energy meter (or None) in ``group``."""
     scalars = {name: getattr(snapshot, name) for name in
                ("cycle_number", "phase_index", "cycles_in_phase", "quiet_cycles", "equivalent",
-                "nominal_area", "initial_clamp", "jump")}
+                "nominal_area", "initial_clamp", "jump", "loosening_at")}
     group.attrs["scalars"] = json.dumps(scalars)
     group.create_dataset("cof_initial", data=snapshot.cof_initial)
     if snapshot.locked_elongation is not None:
