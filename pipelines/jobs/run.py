@@ -14,7 +14,11 @@ from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from pipelines.build import Model, build
 from pipelines.output.damage import DamageObserver
-from pipelines.output.paraview import write_final_vtu, write_increment_series, write_interface_series
+from pipelines.output.paraview import (
+    write_final_vtu,
+    write_increment_series,
+    write_interface_series,
+)
 from pipelines.output.plots import plot_results
 from pipelines.output.results import ResultsWriter
 from pipelines.scene import Scene

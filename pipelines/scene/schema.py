@@ -150,8 +150,8 @@ SCHEMA = {
         "max_cutbacks": (int, False, _integer_at_least(0), "halvings of a failing increment"),
         "record_every": (int, False, _integer_at_least(1), "store fields every n cycles"),
         "field_output": (NUMBER + (str, list), False, _field_output,
-                         "fields within the recorded cycles: \"cycle\" (at their ends only), \"increment\" "
-                         "(every increment) or a list of cycle fractions, e.g. [0.25, 0.5, 0.75, 1.0]"),
+                         ("fields within the recorded cycles: \"cycle\" (at their ends only), \"increment\" "
+                          "(every increment) or a list of cycle fractions, e.g. [0.25, 0.5, 0.75, 1.0]")),
         "checkpoint_every": (int, False, _integer_at_least(0), "write checkpoint.h5 every n cycles (0: never)"),
     },
 }
