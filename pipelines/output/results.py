@@ -28,6 +28,9 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
                            is the worst status over a whole cycle)
     /final/                the final per-point fields
     /summary               attrs: verdict, stationary, figures (JSON)
+    /histories/            only in a coupled run: the multibody histories that drive its loads, as
+                           ``fretwork mbs`` writes them (time s, cw<k>_* signals; see
+                           :func:`write_driving_histories`): ``fretwork export-fmu`` plays them back
 
 The file is written as ``results.h5.part`` and renamed when the run completes, so a
 ``results.h5`` is never half-written; the part file is flushed every cycle and can be read
@@ -46,6 +49,7 @@ import numpy as np
 
 from contact.energy import EnergyMeter
 from contact.procedure import PHASES, CycleSummary, IncrementRecord, Observer
+from mbs.results import write_loading_histories
 from pipelines.output.checkpoint import read_snapshot, write_snapshot
 from reduction.errors import InputError
 
@@ -96,6 +100,17 @@ def _append(group: h5py.Group, name: str, row, units: str) -> None:
     _append_rows(group, name, np.asarray(row)[None], units)
 
 
+def write_driving_histories(root: h5py.Group, coupled) -> None:
+    """``/histories``: the multibody histories a coupled run's loads come from
+    (:class:`pipelines.coupling.Coupled`), in the layout ``fretwork mbs`` writes, so that
+    ``fretwork export-fmu`` plays them back from either file. ``vibration_scale``: the factor the
+    contact load cycle applies to their vibrating parts (a stated wing amplitude)."""
+    group = root.create_group("histories")
+    write_loading_histories(group, coupled.loading, coupled.settings.counterweight)
+    if coupled.cycle is not None:
+        group.attrs["vibration_scale"] = coupled.cycle.scale
+
+
 class ResultsWriter(Observer):
     """Observer that writes increments and cycles to HDF5 and reports progress.
 
@@ -137,6 +152,8 @@ class ResultsWriter(Observer):
             points.create_dataset(name, data=data).attrs["units"] = units
         root.create_group("increments")
         root.create_group("cycles")
+        if model.coupling is not None:
+            write_driving_histories(root, model.coupling)
 
     def _reopen_from_checkpoint(self) -> None:
         if not self.checkpoint_path.is_file():
