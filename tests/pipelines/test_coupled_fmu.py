@@ -8,11 +8,13 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from mbs.results import MODAL_UNITS
+from mbs.loading import MultibodyLoading
+from mbs.results import MODAL_UNITS, write_loading_histories
 from pipelines import scene as scenes
 from pipelines import stages
 from pipelines.cli.main import main
 from pipelines.coupling import multibody_loading
+from pipelines.fmu.table import read_playback_table
 from pipelines.jobs.run import run_scene
 
 SCENE = Path(__file__).resolve().parents[2] / "examples" / "counterweight.toml"
@@ -51,7 +53,8 @@ def test_the_run_holds_the_driving_histories_in_the_mbs_layout(coupled):
             assert histories[name].attrs["units"] == units, name
         assert list(histories["cw1_frame_acceleration"].attrs["components"]) == [
             "x (tangential)", "y (radial)", "z (crank axis)"]
-        assert list(histories["cw1_modal_coordinates"].attrs["components"]) == [f"mode {k}" for k in range(1, 5)]
+        assert list(histories["cw1_modal_coordinates"].attrs["components"]) == [
+            f"mode {k + 1} ({f:.1f} Hz)" for k, f in enumerate(loading.mode_frequencies_hz)]
         assert histories.attrs["counterweight"] == 1
         # the scene states a wing amplitude: the contact cycle scales the vibration by this factor
         assert histories.attrs["vibration_scale"] == summary["vibration_scale"] != 1.0
@@ -91,3 +94,23 @@ def test_export_fmu_of_an_uncoupled_run_says_where_histories_are(coarse_cylinder
     message = capsys.readouterr().err
     assert "no /histories group" in message and "coupled `fretwork run`" in message
     assert not (tmp_path / "loads.fmu").exists()
+
+
+def test_histories_without_modes_have_no_modal_signals_and_play_back(tmp_path):
+    """An interface-histories file may carry no modes: the run's /histories then has none either."""
+    time = np.arange(8) / 1000.0
+    motion = np.outer(np.sin(2 * np.pi * 125 * time), [1.0, 2.0, 3.0])
+    empty = np.zeros((8, 0))
+    loading = MultibodyLoading(speed_rpm=750.0, time=time, frame_acceleration=motion, angular_velocity=2 * motion,
+                               angular_acceleration=3 * motion, modal_coordinates=empty, modal_velocities=empty,
+                               modal_accelerations=empty, wing_torsion=motion[:, 0], mesh_points=np.zeros((3, 0)),
+                               mesh_cells=np.zeros((4, 0), dtype=int), mode_shapes=np.zeros((0, 0)), geometry={},
+                               mode_frequencies_hz=np.zeros(0), torsion_mode=0, wall_time_s=0.0)
+    with h5py.File(tmp_path / "results.h5", "w") as file:
+        write_loading_histories(file.create_group("histories"), loading, 2)
+    table = read_playback_table(tmp_path)
+    axes = ("x (tangential)", "y (radial)", "z (crank axis)")
+    assert table.names == tuple(f"cw2_{signal}.'{axis}'" for signal in
+                                ("angular_acceleration", "angular_velocity", "frame_acceleration")
+                                for axis in axes) + ("cw2_wing_torsion",)
+    assert np.array_equal(table.values[:, 6:9], motion) and np.array_equal(table.time, time)
