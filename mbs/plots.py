@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402 (backend must be chosen first)
 import numpy as np  # noqa: E402
 
 from mbs.campbell import Campbell  # noqa: E402
-from mbs.histories import RunHistories  # noqa: E402
+from mbs.histories import RunHistories, steady_part  # noqa: E402
 from mbs.spectra import Spectrum  # noqa: E402
 
 
@@ -25,16 +25,25 @@ def _save(figure, path) -> Path:
 
 
 def plot_time_history(histories: RunHistories, path) -> Path:
-    """Wing-tip axial motion of both CWs (micrometres) over shaft revolutions."""
-    figure, axes = plt.subplots(2, 1, figsize=(8, 5), sharex=True)
-    revolutions = (histories.crank_angle - histories.crank_angle[0]) / (2.0 * np.pi)
-    for c, ax in enumerate(axes):
-        ax.plot(revolutions, 1e3 * histories.cw_wing_tip_axial[c, :, 0], lw=0.8, label="-x wing tip")
-        ax.plot(revolutions, 1e3 * histories.cw_wing_tip_axial[c, :, 1], lw=0.8, label="+x wing tip")
-        ax.set_ylabel(f"CW{c + 1} axial tip (um)")
+    """Wing-tip axial motion and wing torsion of every CW (µm) over the steady part of the run
+    (:func:`mbs.histories.steady_part`, where the wing amplitude is measured), against shaft
+    revolutions from the start of the run; the start-up transient before it is left out."""
+    n_cw = histories.cw_wing_tip_axial.shape[0]
+    steady = steady_part(len(histories.time))
+    figure, axes = plt.subplots(n_cw, 1, figsize=(8, 1.2 + 2.2 * n_cw), sharex=True, squeeze=False)
+    revolutions = ((histories.crank_angle - histories.crank_angle[0]) / (2.0 * np.pi))[steady]
+    amplitudes = histories.wing_amplitude
+    for c, ax in enumerate(axes[:, 0]):
+        ax.plot(revolutions, 1e3 * histories.cw_wing_tip_axial[c, steady, 0], lw=0.8, label="-x wing tip")
+        ax.plot(revolutions, 1e3 * histories.cw_wing_tip_axial[c, steady, 1], lw=0.8, label="+x wing tip")
+        ax.plot(revolutions, 1e3 * histories.wing_torsion[c, steady], "k", lw=1.0,
+                label=f"wing torsion (u+x - u-x)/2, amplitude {1e3 * amplitudes[c]:.3g} µm")
+        ax.set_ylabel(f"CW{c + 1} axial motion (µm)")
         ax.grid(True, alpha=0.3)
-        ax.legend(loc="upper right", fontsize=8)
-    axes[-1].set_xlabel("shaft revolutions")
+        ax.legend(loc="upper right", fontsize=7)
+    axes[0, 0].set_title("wing tips over the steady second half of the run (where the wing amplitude is "
+                         "measured; start-up transient left out)", fontsize=9)
+    axes[-1, 0].set_xlabel("shaft revolutions from the start of the run (rev)")
     return _save(figure, path)
 
 
@@ -47,40 +56,60 @@ def plot_spectrum(spectrum: Spectrum, path, *, xlabel: str = "frequency (Hz)", t
     for k in range(amplitude.shape[1]):
         ax.semilogy(spectrum.frequency[shown], 1e3 * amplitude[shown, k] + 1e-12, lw=0.8, label=f"CW{k + 1}")
     ax.set_xlabel(xlabel)
-    ax.set_ylabel("amplitude (um)")
+    ax.set_ylabel("amplitude (µm)")
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     return _save(figure, path)
 
 
+def _crossing_orders(campbell: Campbell) -> set:
+    return {crossing["order"] for crossing in campbell.crossings + campbell.system_crossings}
+
+
 def plot_campbell(campbell: Campbell, path, *, operating_rpm: float | None = None) -> Path:
     """Mode lines (reduced CW black, coupled model grey) and engine-order lines over speed;
-    crossings with the coupled-model modes marked red, with the CW modes as open circles."""
-    figure, ax = plt.subplots(figsize=(7, 5))
+    crossings with the coupled-model modes marked red, with the CW modes as open circles.
+
+    The legend names every line kind: each order that crosses a mode line in its own colour,
+    the orders that cross none (a gas-torque series) as one grey entry when there are many."""
+    figure, ax = plt.subplots(figsize=(10, 5.5))
     for mode in range(campbell.frequencies.shape[1]):
         ax.plot(campbell.speeds_rpm, campbell.frequencies[:, mode], "k-", lw=1.2,
-                label="reduced CW (interface held)" if mode == 0 else None)
+                label=f"CW modes, interface held ({campbell.frequencies.shape[1]})" if mode == 0 else None)
     f_max = 1.15 * campbell.frequencies.max()
     if campbell.system_frequencies is not None:
         system = campbell.system_frequencies
         for mode in range(system.shape[1]):
             ax.plot(campbell.speeds_rpm, system[:, mode], "-", color="0.6", lw=0.8,
-                    label="coupled multibody model" if mode == 0 else None)
+                    label=f"coupled multibody model modes ({system.shape[1]})" if mode == 0 else None)
+    crossing = _crossing_orders(campbell)
+    quiet = [order for order in campbell.orders if order not in crossing]
+    grouped = len(campbell.orders) > 6 and len(quiet) > 1
+    colours = iter(plt.rcParams["axes.prop_cycle"].by_key()["color"] * 4)
     for order in campbell.orders:
-        ax.plot(campbell.speeds_rpm, order * campbell.speeds_rpm / 60.0, "--", lw=0.7, label=f"order {order:g}")
-    for crossing in campbell.crossings:
-        ax.plot(crossing["speed_rpm"], crossing["frequency_hz"], "ko", ms=6, mfc="none")
-    for crossing in campbell.system_crossings:
-        ax.plot(crossing["speed_rpm"], crossing["frequency_hz"], "ro", ms=4)
+        line = order * campbell.speeds_rpm / 60.0
+        if grouped and order in quiet:
+            label = (f"engine orders {min(quiet):g} … {max(quiet):g} ({len(quiet)}, no crossing)"
+                     if order == quiet[0] else None)
+            ax.plot(campbell.speeds_rpm, line, "--", color="0.45", lw=0.6, label=label)
+        else:
+            ax.plot(campbell.speeds_rpm, line, "--", color=next(colours), lw=1.0,
+                    label=f"engine order {order:g} (f = {order:g} · rpm / 60)")
+    if campbell.crossings:
+        ax.plot([c["speed_rpm"] for c in campbell.crossings], [c["frequency_hz"] for c in campbell.crossings],
+                "ko", ms=7, mfc="none", ls="none", label="order crosses a CW mode")
+    if campbell.system_crossings:
+        ax.plot([c["speed_rpm"] for c in campbell.system_crossings],
+                [c["frequency_hz"] for c in campbell.system_crossings],
+                "ro", ms=4, ls="none", label="order crosses a coupled mode (resonance)")
     if operating_rpm is not None:
-        ax.axvline(operating_rpm, color="gray", lw=0.8)
+        ax.axvline(operating_rpm, color="k", lw=0.9, ls=":", label=f"operating speed {operating_rpm:g} rpm")
     ax.set_ylim(0.0, f_max)
     ax.set_xlabel("engine speed (rpm)")
     ax.set_ylabel("frequency (Hz)")
     ax.set_title("Campbell diagram (rotating frame)")
-    if len(campbell.orders) <= 12:
-        ax.legend(fontsize=7, loc="upper left")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     ax.grid(True, alpha=0.3)
     return _save(figure, path)
 
@@ -91,10 +120,10 @@ def plot_sweep(speeds_rpm, wing_amplitude, path, *, crossings_rpm=()) -> Path:
     amplitude = np.atleast_2d(np.asarray(wing_amplitude).T).T
     for c in range(amplitude.shape[1]):
         ax.plot(speeds_rpm, 1e3 * amplitude[:, c], "o-", ms=3, label=f"CW{c + 1}")
-    for speed in crossings_rpm:
-        ax.axvline(speed, color="r", lw=0.8, ls=":")
+    for k, speed in enumerate(crossings_rpm):
+        ax.axvline(speed, color="r", lw=0.8, ls=":", label="Campbell crossing (resonance)" if k == 0 else None)
     ax.set_xlabel("engine speed (rpm)")
-    ax.set_ylabel("wing torsion amplitude (um)")
+    ax.set_ylabel("wing torsion amplitude (µm)")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     return _save(figure, path)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import h5py
 import numpy as np
@@ -23,6 +24,9 @@ from mbs.counterweight import ReducedCounterweight
 from mbs.histories import RunHistories
 from mbs.parameters import ModelParams
 from mbs.spectra import Spectrum
+
+if TYPE_CHECKING:  # mbs.loading runs the model (exudyn): not imported to write files
+    from mbs.loading import MultibodyLoading
 
 FORMAT = "fretwork-results"
 FORMAT_VERSION = 1
@@ -58,8 +62,34 @@ def _signal(group, name, data, units, description, components=None):
         dataset.attrs["components"] = list(components)
 
 
+def _driving_signals(tag, frame_acceleration, angular_velocity, angular_acceleration, modal_coordinates,
+                     modal_accelerations, modes):
+    """The signals of one CW that drive a coupled contact model (its inertia fields); the modal
+    ones only when it has ``modes`` (component names)."""
+    if modes:
+        yield from _modal_signals(tag, modal_coordinates, modal_accelerations, modes)
+    yield (f"{tag}_frame_acceleration", frame_acceleration, "mm/s^2",
+           f"Absolute acceleration of the {tag} interface origin (rigid-body part of the field).", _XYZ)
+    yield (f"{tag}_angular_velocity", angular_velocity, "rad/s",
+           f"Angular velocity of the {tag} frame (gives the centrifugal field omega x (omega x r)).", _XYZ)
+    yield (f"{tag}_angular_acceleration", angular_acceleration, "rad/s^2",
+           f"Angular acceleration of the {tag} frame (rigid-body field alpha x r).", _XYZ)
+
+
+def _modal_signals(tag, modal_coordinates, modal_accelerations, modes):
+    yield (f"{tag}_modal_coordinates", modal_coordinates, MODAL_UNITS,
+           f"Craig-Bampton modal coordinates of {tag} (mass-normalised fixed-interface modes).", modes)
+    yield (f"{tag}_modal_acceleration", modal_accelerations, MODAL_UNITS + "/s^2",
+           f"Second time derivative of the {tag} modal coordinates (modal acceleration field = Psi q'').", modes)
+
+
+def _wing_torsion_signal(tag, wing_torsion):
+    return (f"{tag}_wing_torsion", wing_torsion, "mm",
+            f"Opposite-phase ('torsion') part of the {tag} wing-tip axial motion, (u(+x) - u(-x))/2.", None)
+
+
 def _history_signals(histories: RunHistories, reduced: ReducedCounterweight):
-    modes = [f"mode {k + 1} ({f:.1f} Hz)" for k, f in enumerate(reduced.eigenfrequencies)]
+    modes = _mode_names(reduced.eigenfrequencies)
     for c in range(histories.cw_modal_coordinates.shape[0]):
         tag = f"cw{c + 1}"
         com = reduced.center_of_mass
@@ -72,23 +102,41 @@ def _history_signals(histories: RunHistories, reduced: ReducedCounterweight):
                f"Force the web applies to {tag} at the interface (joint reaction).", _XYZ)
         yield (f"{tag}_interface_moment", histories.cw_interface_moment[c], "N*mm",
                f"Moment the web applies to {tag} about the interface centre (joint reaction).", _XYZ)
-        yield (f"{tag}_modal_coordinates", histories.cw_modal_coordinates[c], MODAL_UNITS,
-               f"Craig-Bampton modal coordinates of {tag} (mass-normalised fixed-interface modes).", modes)
-        yield (f"{tag}_modal_acceleration", histories.cw_modal_accelerations[c], MODAL_UNITS + "/s^2",
-               f"Second time derivative of the {tag} modal coordinates (modal acceleration field = Psi q'').", modes)
-        yield (f"{tag}_frame_acceleration", histories.cw_frame_acceleration[c], "mm/s^2",
-               f"Absolute acceleration of the {tag} interface origin (rigid-body part of the field).", _XYZ)
-        yield (f"{tag}_angular_velocity", omega, "rad/s",
-               f"Angular velocity of the {tag} frame (gives the centrifugal field omega x (omega x r)).", _XYZ)
-        yield (f"{tag}_angular_acceleration", histories.cw_angular_acceleration[c], "rad/s^2",
-               f"Angular acceleration of the {tag} frame (rigid-body field alpha x r).", _XYZ)
+        yield from _driving_signals(tag, histories.cw_frame_acceleration[c], omega, histories.cw_angular_acceleration[c],
+                                    histories.cw_modal_coordinates[c], histories.cw_modal_accelerations[c], modes)
         yield (f"{tag}_centrifugal_acceleration_com", np.cross(omega, np.cross(omega, com)), "mm/s^2",
                f"Centrifugal acceleration at the {tag} centre of mass relative to the interface origin.", _XYZ)
         yield (f"{tag}_wing_tip_displacement", histories.cw_wing_tip_axial[c], "mm",
                f"Axial (crank-axis) deformation of the two {tag} wing tips relative to the interface.",
                ["-x wing tip", "+x wing tip"])
-        yield (f"{tag}_wing_torsion", histories.wing_torsion[c], "mm",
-               f"Opposite-phase ('torsion') part of the {tag} wing-tip axial motion, (u(+x) - u(-x))/2.", None)
+        yield _wing_torsion_signal(tag, histories.wing_torsion[c])
+
+
+def _mode_names(frequencies) -> list[str]:
+    return [f"mode {k + 1} ({f:.1f} Hz)" for k, f in enumerate(frequencies)]
+
+
+def write_loading_histories(group, loading: MultibodyLoading, counterweight: int) -> None:
+    """Write into ``group`` (a results file's ``/histories``) the histories a coupled contact run
+    is driven by: CW ``counterweight`` (1 = first) over the steady part of the multibody run (or
+    as its interface-histories file gives them), named, united and described as :func:`write_run`
+    writes them, plus its modal velocities; no modal signals when the histories have no modes."""
+    tag = f"cw{counterweight}"
+    modes = _mode_names(loading.mode_frequencies_hz)
+    _signal(group, "time", loading.time, "s", "Sample times (fixed step).")
+    for name, data, units, description, components in _driving_signals(
+            tag, loading.frame_acceleration, loading.angular_velocity, loading.angular_acceleration,
+            loading.modal_coordinates, loading.modal_accelerations, modes):
+        _signal(group, name, data, units, description, components)
+    if modes:
+        _signal(group, f"{tag}_modal_velocity", loading.modal_velocities, MODAL_UNITS + "/s",
+                f"Time derivative of the {tag} modal coordinates (Coriolis field 2 omega x (Psi q')).", modes)
+    _signal(group, *_wing_torsion_signal(tag, loading.wing_torsion))
+    group.attrs["counterweight"] = counterweight
+    group.attrs["speed_rpm"] = loading.speed_rpm
+    group.attrs["description"] = (f"Histories of {tag} at {loading.speed_rpm:g} rpm that drive the coupled contact "
+                                  "run's inertia loads: the steady part of the multibody run, or the scene's "
+                                  "interface-histories file.")
 
 
 def write_run(path, params: ModelParams, reduced: ReducedCounterweight, histories: RunHistories,

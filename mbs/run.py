@@ -71,7 +71,7 @@ def run_model(params: ModelParams, out_dir, *, bodies: tuple | None = None,
     }
     if "wing_torsion_orders" in spectra:
         plots["order_spectrum"] = plot_spectrum(spectra["wing_torsion_orders"], out_dir / "wing_order_spectrum.png",
-                                                xlabel="engine order", title="wing torsion, order spectrum",
+                                                xlabel="engine order (cycles per revolution)", title="wing torsion, order spectrum",
                                                 x_max=f_max / shaft_hz)
     return RunOutputs(histories=histories, reduced=reduced, spectra=spectra, campbell=campbell,
                       results_file=results_file, plots=plots)

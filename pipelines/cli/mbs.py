@@ -81,7 +81,7 @@ def add_sweep_parser(subparsers):
 
 
 def _table(result) -> str:
-    lines = [f"{'rpm':>8} {'CW1 wing um':>12} {'CW2 wing um':>12} {'f1 Hz':>9} {'f2 Hz':>9}  note"]
+    lines = [f"{'rpm':>8} {'CW1 wing µm':>12} {'CW2 wing µm':>12} {'f1 Hz':>9} {'f2 Hz':>9}  note"]
     for i, speed in enumerate(result.speeds_rpm):
         amplitude = 1e3 * result.wing_amplitude[i]
         f = result.dominant_frequencies[i]

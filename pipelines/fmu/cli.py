@@ -17,7 +17,8 @@ def add_export_fmu_parser(subparsers: argparse._SubParsersAction) -> argparse.Ar
     parser = subparsers.add_parser(
         "export-fmu",
         help="export load histories as a co-simulation FMU",
-        description="Export the /histories of a results file as a co-simulation FMU whose outputs play "
+        description="Export the /histories of a results file (the run.h5 of `fretwork mbs`, or the "
+        "results.h5 of a coupled `fretwork run`) as a co-simulation FMU whose outputs play "
         "the histories back (linear interpolation, parameters time_offset, periodic, period).",
     )
     _configure_parser(parser)
@@ -25,7 +26,7 @@ def add_export_fmu_parser(subparsers: argparse._SubParsersAction) -> argparse.Ar
 
 
 def _configure_parser(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("results", type=Path, help="results file (HDF5) with a /histories group")
+    parser.add_argument("results", type=Path, help="results file (HDF5) with a /histories group, or a coupled run's output folder")
     parser.add_argument(
         "--signals", nargs="+", metavar="NAME",
         help="signals to export (names under /histories, space or comma separated); default: all",

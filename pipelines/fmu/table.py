@@ -1,7 +1,10 @@
 """The sampled histories of a results file and the binary table the FMU's C player reads.
 
 Signals come from the ``/histories`` group (one output per component, named and united after
-the results file); the table (``resources/histories.bin``) is laid out as in template/player.c.
+the results file) of either results file that holds one: ``fretwork mbs``'s ``run.h5`` (every
+CW over the whole run) or a coupled ``fretwork run``'s ``results.h5`` (the CW that loads the
+contact, over the steady part of the multibody run; :mod:`pipelines.output.results`). A run's
+output folder stands for its ``results.h5``. The table (``resources/histories.bin``) is laid out as in template/player.c.
 Units follow the results file (fretwork uses mm, N, MPa, t, s, mJ).
 """
 
@@ -48,8 +51,11 @@ class PlaybackTable:
 
 
 def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] | None = None) -> PlaybackTable:
-    """Read and check the ``/histories`` group; flatten (n, k) signals to k scalar outputs."""
+    """Read and check the ``/histories`` group; flatten (n, k) signals to k scalar outputs.
+    ``results_path``: a results file, or a run's output folder (its ``results.h5``)."""
     results_path = Path(results_path)
+    if results_path.is_dir() and (results_path / "results.h5").is_file():
+        results_path = results_path / "results.h5"
     if not results_path.is_file():
         raise InputError(f"results file {results_path} does not exist")
     try:
@@ -59,7 +65,9 @@ def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] 
     with results:
         if "histories" not in results or not isinstance(results["histories"], h5py.Group):
             raise InputError(
-                f"results file {results_path} has no /histories group: write the load histories first"
+                f"results file {results_path} has no /histories group: the multibody histories are in the "
+                "run.h5 of `fretwork mbs` and in the results.h5 of a coupled `fretwork run` (a scene with "
+                "[coupling]); this run has none"
             )
         histories = results["histories"]
         time = _read_time(histories, results_path)

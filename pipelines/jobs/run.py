@@ -14,7 +14,11 @@ from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from pipelines.build import Model, build
 from pipelines.output.damage import DamageObserver
-from pipelines.output.paraview import write_final_vtu, write_interface_series
+from pipelines.output.paraview import (
+    write_final_vtu,
+    write_increment_series,
+    write_interface_series,
+)
 from pipelines.output.plots import plot_results
 from pipelines.output.results import ResultsWriter
 from pipelines.scene import Scene
@@ -98,9 +102,9 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
         raise InputError(f"{out_dir / 'results.h5'} is complete: there is nothing to resume")
     out_dir.mkdir(parents=True, exist_ok=True)
     writer = ResultsWriter(out_dir / "results.h5", model, space, record_every=settings.get("record_every", 1),
-                           resume=resume)
-    if isinstance(solver, SlidingSolver) and writer.meter is not None:
-        solver.listeners.append(writer.meter.follow)
+                           resume=resume, field_output=settings.get("field_output"))
+    if isinstance(solver, SlidingSolver):
+        solver.listeners.append(writer.follow)
     observer = DamageObserver(writer, model, space)
     if isinstance(solver, SlidingSolver):
         solver.listeners.append(observer.follow)
@@ -126,6 +130,8 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     written = plot_results(path, out_dir / "plots") if plots else []
     write_interface_series(path, out_dir / "interface.xdmf")
     write_final_vtu(path, out_dir / "interface_final.vtu")
+    if writer.output_increments:
+        write_increment_series(path, out_dir / "interface_increments.xdmf")
     stage_times["outputs_s"] = time.perf_counter() - clock
     summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
                **result.figures, "linear_solver": _linear_solver(solver).description()}

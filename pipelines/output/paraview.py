@@ -1,7 +1,10 @@
 """Interface fields as an XDMF time series (meshio) that opens in ParaView.
 
 The contact surface is written as its facets (lines in 2D, quadrilaterals or triangles in
-3D) with one time step per recorded cycle; time is the equivalent cycle number.
+3D). ``interface.xdmf`` has one time step per recorded cycle, time the equivalent cycle number.
+``interface_increments.xdmf`` (a run with ``[procedure] field_output``) has one per written
+increment, time (cycle − 1) + fraction of the cycle in simulated cycles: the end of cycle 3 is
+at 3.0, its peak load (fraction 0.25 of a sine cycle) at 2.25.
 """
 
 from __future__ import annotations
@@ -33,20 +36,16 @@ def _point_data(fields: h5py.Group, row: int | None) -> dict:
     return data
 
 
-def write_interface_series(results_path: str | Path, out_path: str | Path) -> Path:
-    """Write ``out_path`` (.xdmf, with its .h5 beside it) from a results file."""
-    out_path = Path(out_path)
-    with h5py.File(results_path, "r") as file:
-        points = file["points/coordinates"][()]
-        facets = file["points/facets"][()]
-        if points.shape[1] == 2:
-            points = np.column_stack([points, np.zeros(len(points))])
-        cells = [(CELL_TYPES[facets.shape[1]], facets)]
-        fields = file["cycles/fields"]
-        cycles = file["cycles/cycle"][()]
-        equivalent = dict(zip(cycles, file["cycles/equivalent_cycles"][()]))
-        steps = [(float(equivalent.get(cycle, cycle)), _point_data(fields, row))
-                 for row, cycle in enumerate(fields["cycle"][()])]
+def _surface(file: h5py.File) -> tuple[np.ndarray, list]:
+    """Points (n, 3) mm and cells of the contact surface of a results file."""
+    points = file["points/coordinates"][()]
+    facets = file["points/facets"][()]
+    if points.shape[1] == 2:
+        points = np.column_stack([points, np.zeros(len(points))])
+    return points, [(CELL_TYPES[facets.shape[1]], facets)]
+
+
+def _write_series(out_path: Path, points, cells, steps) -> Path:
     # meshio 5.3 writes the heavy-data .h5 into the current directory (it keeps only the
     # file stem), so write from inside the target folder.
     previous = Path.cwd()
@@ -61,14 +60,32 @@ def write_interface_series(results_path: str | Path, out_path: str | Path) -> Pa
     return out_path
 
 
+def write_interface_series(results_path: str | Path, out_path: str | Path) -> Path:
+    """Write ``out_path`` (.xdmf, with its .h5 beside it) from a results file."""
+    with h5py.File(results_path, "r") as file:
+        points, cells = _surface(file)
+        fields = file["cycles/fields"]
+        cycles = file["cycles/cycle"][()]
+        equivalent = dict(zip(cycles, file["cycles/equivalent_cycles"][()]))
+        steps = [(float(equivalent.get(cycle, cycle)), _point_data(fields, row))
+                 for row, cycle in enumerate(fields["cycle"][()])]
+    return _write_series(Path(out_path), points, cells, steps)
+
+
+def write_increment_series(results_path: str | Path, out_path: str | Path) -> Path:
+    """Write ``out_path`` (.xdmf) from the ``/increment_fields`` of a results file: one time step
+    per written increment at (cycle − 1) + fraction."""
+    with h5py.File(results_path, "r") as file:
+        points, cells = _surface(file)
+        group = file["increment_fields"]
+        steps = [(float(time), _point_data(group["fields"], row)) for row, time in enumerate(group["time"][()])]
+    return _write_series(Path(out_path), points, cells, steps)
+
+
 def write_final_vtu(results_path: str | Path, out_path: str | Path) -> Path:
     """The final interface fields as one .vtu file."""
     with h5py.File(results_path, "r") as file:
-        points = file["points/coordinates"][()]
-        facets = file["points/facets"][()]
-        if points.shape[1] == 2:
-            points = np.column_stack([points, np.zeros(len(points))])
-        mesh = meshio.Mesh(points, [(CELL_TYPES[facets.shape[1]], facets)],
-                           point_data=_point_data(file["final"], None))
+        points, cells = _surface(file)
+        mesh = meshio.Mesh(points, cells, point_data=_point_data(file["final"], None))
     mesh.write(out_path)
     return Path(out_path)

@@ -16,8 +16,21 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
                            labels in the ``dofs`` attribute of /increments/control
     /cycles/               one row per recorded cycle: cycle, phase, equivalent_cycles and one
                            dataset per global figure (figures/<name>); fields/<name> (rows, n[, k])
+    /increment_fields/     only with [procedure] field_output: per-point fields at chosen increments
+                           of the recorded cycles ("increment": every one; a list of cycle fractions:
+                           the increment nearest each). One row per written increment: time
+                           (cycles; (cycle − 1) + fraction, as in /increments/time), cycle,
+                           fraction (of the cycle, exact: k / increments_per_cycle), and
+                           fields/<name> (rows, n[, k]): pressure, shear, cof, accumulated_slip,
+                           dissipation, wear_depth as at that increment (at fraction 1 the same
+                           numbers as the cycle's row in /cycles/fields) and status, the
+                           increment's own status (codes as /final/status; /cycles/fields/status
+                           is the worst status over a whole cycle)
     /final/                the final per-point fields
     /summary               attrs: verdict, stationary, figures (JSON)
+    /histories/            only in a coupled run: the multibody histories that drive its loads, as
+                           ``fretwork mbs`` writes them (time s, cw<k>_* signals; see
+                           :func:`write_driving_histories`): ``fretwork export-fmu`` plays them back
 
 The file is written as ``results.h5.part`` and renamed when the run completes, so a
 ``results.h5`` is never half-written; the part file is flushed every cycle and can be read
@@ -36,6 +49,7 @@ import numpy as np
 
 from contact.energy import EnergyMeter
 from contact.procedure import PHASES, CycleSummary, IncrementRecord, Observer
+from mbs.results import write_loading_histories
 from pipelines.output.checkpoint import read_snapshot, write_snapshot
 from reduction.errors import InputError
 
@@ -49,6 +63,18 @@ FIELD_UNITS = {
     "fdp": "MPa*mm", "ffdp": "MPa^2*mm", "surface_tangential_stress": "MPa",
 }
 STATUS_NAMES = "0 open, 1 stick, 2 slip, 3 slip at cof_max"
+
+
+def output_increments(field_output, increments_per_cycle: int) -> frozenset:
+    """The increments k (1 … n) of a recorded cycle whose fields ``field_output`` asks for:
+    "cycle" or None none (the cycle's end is in /cycles/fields), "increment" all, a list of
+    cycle fractions the increment nearest each (k = round(fraction·n), at least 1)."""
+    n = increments_per_cycle
+    if field_output is None or field_output == "cycle":
+        return frozenset()
+    if field_output == "increment":
+        return frozenset(range(1, n + 1))
+    return frozenset(max(1, round(fraction * n)) for fraction in field_output)
 
 
 def _append_rows(group: h5py.Group, name: str, rows, units: str) -> None:
@@ -74,6 +100,17 @@ def _append(group: h5py.Group, name: str, row, units: str) -> None:
     _append_rows(group, name, np.asarray(row)[None], units)
 
 
+def write_driving_histories(root: h5py.Group, coupled) -> None:
+    """``/histories``: the multibody histories a coupled run's loads come from
+    (:class:`pipelines.coupling.Coupled`), in the layout ``fretwork mbs`` writes, so that
+    ``fretwork export-fmu`` plays them back from either file. ``vibration_scale``: the factor the
+    contact load cycle applies to their vibrating parts (a stated wing amplitude)."""
+    group = root.create_group("histories")
+    write_loading_histories(group, coupled.loading, coupled.settings.counterweight)
+    if coupled.cycle is not None:
+        group.attrs["vibration_scale"] = coupled.cycle.scale
+
+
 class ResultsWriter(Observer):
     """Observer that writes increments and cycles to HDF5 and reports progress.
 
@@ -82,7 +119,7 @@ class ResultsWriter(Observer):
     """
 
     def __init__(self, path: Path, model, space, *, record_every: int = 1, progress=None,
-                 track_energy: bool = True, resume: bool = False):
+                 track_energy: bool = True, resume: bool = False, field_output=None):
         self.final_path = Path(path)
         self.part_path = self.final_path.with_suffix(".h5.part")
         self.checkpoint_path = self.final_path.with_name("checkpoint.h5")
@@ -94,6 +131,9 @@ class ResultsWriter(Observer):
         self._rows: dict[str, list] = {}
         self._units: dict[str, str] = {}
         self.snapshot = None
+        self.area = space.structure.area
+        self.output_increments = output_increments(field_output, model.procedure.increments_per_cycle)
+        self._increment_fields: list[tuple[int, int, float, dict]] = []
         if resume:
             self._reopen_from_checkpoint()
             return
@@ -112,6 +152,8 @@ class ResultsWriter(Observer):
             points.create_dataset(name, data=data).attrs["units"] = units
         root.create_group("increments")
         root.create_group("cycles")
+        if model.coupling is not None:
+            write_driving_histories(root, model.coupling)
 
     def _reopen_from_checkpoint(self) -> None:
         if not self.checkpoint_path.is_file():
@@ -140,6 +182,12 @@ class ResultsWriter(Observer):
             write_snapshot(file.create_group("checkpoint"), snapshot, self.meter)
         os.replace(temporary, self.checkpoint_path)
         self.file = h5py.File(self.part_path, "a")
+
+    def follow(self, space) -> None:
+        """Go on in ``space``, a new pairing's contact space (finite sliding): its point areas."""
+        self.area = space.structure.area
+        if self.meter is not None:
+            self.meter.follow(space)
 
     def phase(self, name, n_cycles):
         if self.progress is not None:
@@ -175,13 +223,47 @@ class ResultsWriter(Observer):
             self._row("control/force", forces, "N")
         if record.bolt_forces is not None:
             self._row("bolt_forces", record.bolt_forces, "N")
+        if self.output_increments and record.phase != "preload" and self._recorded(record.cycle):
+            self._keep_increment_fields(record)
         if self.progress is not None:
             self.progress.increment(record)
+
+    def _recorded(self, cycle: int) -> bool:
+        return cycle % self.record_every == 0 or cycle == 1
+
+    def _keep_increment_fields(self, record: IncrementRecord) -> None:
+        n = self.model.procedure.increments_per_cycle
+        k = round((record.time - (record.cycle - 1)) * n)
+        if k not in self.output_increments:
+            return
+        # the same operations as the cycle summary's, so that at k = n the numbers are its own
+        per_point = record.equilibrium.forces.reshape(self.area.size, -1) / self.area[:, None]
+        state = record.state
+        fields = {"pressure": per_point[:, 0], "shear": per_point[:, 1:], "status": record.status,
+                  "cof": state.cof, "accumulated_slip": state.accumulated_slip, "dissipation": state.dissipation}
+        if state.wear_depth is not None:
+            fields["wear_depth"] = state.wear_depth
+        self._increment_fields.append((record.cycle, k, record.time,
+                                       {name: np.array(value, copy=True) for name, value in fields.items()}))
+
+    def _flush_increment_fields(self) -> None:
+        if not self._increment_fields:
+            return
+        group = self.file.require_group("increment_fields")
+        n = self.model.procedure.increments_per_cycle
+        cycles, steps, times, rows = zip(*self._increment_fields)
+        _append_rows(group, "time", np.array(times), "cycles")
+        _append_rows(group, "cycle", np.array(cycles), "1")
+        _append_rows(group, "fraction", np.array(steps) / n, "1 (of the load cycle)")
+        for name in rows[0]:
+            _append_rows(group, f"fields/{name}", np.stack([row[name] for row in rows]), FIELD_UNITS[name])
+        group["fields/status"].attrs["codes"] = STATUS_NAMES
+        self._increment_fields = []
 
     def cycle(self, summary: CycleSummary) -> None:
         self._flush_increments()
         group = self.file["cycles"]
-        recorded = summary.cycle % self.record_every == 0 or summary.cycle == 1
+        recorded = self._recorded(summary.cycle)
         _append(group, "cycle", summary.cycle, "1")
         _append(group, "phase", PHASES.index(summary.phase), "0 preload, 1 cof, 2 wear")
         _append(group, "equivalent_cycles", summary.equivalent_cycles, "cycles")
@@ -191,6 +273,7 @@ class ResultsWriter(Observer):
             _append(group, "fields/cycle", summary.cycle, "1")
             for name, value in self._fields(summary).items():
                 _append(group, f"fields/{name}", value, FIELD_UNITS[name])
+        self._flush_increment_fields()
         self.file.flush()
         if self.progress is not None:
             self.progress.cycle(summary)

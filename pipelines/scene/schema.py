@@ -59,6 +59,16 @@ def _cycle_jump(value):
     return None if value >= 1 else "must be >= 1"
 
 
+def _field_output(value):
+    if not isinstance(value, list):
+        return None if value in ("cycle", "increment") else \
+            "must be \"cycle\", \"increment\" or a list of cycle fractions in (0, 1]"
+    if not value:
+        return "must name at least one cycle fraction in (0, 1]"
+    wrong = [f for f in value if isinstance(f, bool) or not isinstance(f, (int, float)) or not 0 < f <= 1]
+    return f"must hold cycle fractions in (0, 1] (0.25: a quarter into the cycle), not {wrong}" if wrong else None
+
+
 NUMBER = (int, float)
 # key → (types, required, check, meaning with units). "*" marks a table of named entries.
 SCHEMA = {
@@ -139,6 +149,9 @@ SCHEMA = {
         "stop_at_loosening": (bool, False, None, "end the run once loosening is evident (default true)"),
         "max_cutbacks": (int, False, _integer_at_least(0), "halvings of a failing increment"),
         "record_every": (int, False, _integer_at_least(1), "store fields every n cycles"),
+        "field_output": (NUMBER + (str, list), False, _field_output,
+                         ("fields within the recorded cycles: \"cycle\" (at their ends only), \"increment\" "
+                          "(every increment) or a list of cycle fractions, e.g. [0.25, 0.5, 0.75, 1.0]")),
         "checkpoint_every": (int, False, _integer_at_least(0), "write checkpoint.h5 every n cycles (0: never)"),
     },
 }

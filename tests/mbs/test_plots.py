@@ -1,0 +1,106 @@
+"""The multibody plots: µm on the axes, the time history over the steady window the wing
+amplitude is measured on, a Campbell diagram whose legend names every line kind."""
+
+import re
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+from mbs import plots
+from mbs.campbell import Campbell
+from mbs.histories import RunHistories, steady_part
+from mbs.spectra import Spectrum
+
+UNIT = re.compile(r"\((µm|Hz|rpm|rev|cycles per revolution)\)")
+
+
+@pytest.fixture
+def figures(monkeypatch):
+    """The figures the plot functions draw, kept open instead of saved."""
+    drawn = []
+    monkeypatch.setattr(plots, "_save", lambda figure, path: drawn.append(figure) or path)
+    yield drawn
+    for figure in drawn:
+        plt.close(figure)
+
+
+def histories(n=400, n_cw=2):
+    """A run that starts with a large transient and settles to a 2 µm (CW1) wing torsion."""
+    time = np.linspace(0.0, 0.16, n)
+    angle = 2 * np.pi * 12.5 * time
+    decay = 50.0 * np.exp(-time / 0.01)
+    torsion = np.array([(2e-3 + decay * 1e-3) * np.sin(2 * np.pi * 300 * time)] * n_cw)
+    torsion[1] *= 0.5
+    tips = np.stack([-torsion + 1e-3, torsion + 1e-3], axis=-1)
+    zeros3 = np.zeros((n_cw, n, 3))
+    return RunHistories(time=time, crank_angle=angle, crank_speed=np.full(n, 2 * np.pi * 12.5),
+                        cw_interface_displacement=zeros3, cw_interface_rotation=zeros3, cw_interface_force=zeros3,
+                        cw_interface_moment=zeros3, cw_modal_coordinates=np.zeros((n_cw, n, 2)),
+                        cw_modal_velocities=np.zeros((n_cw, n, 2)), cw_modal_accelerations=np.zeros((n_cw, n, 2)),
+                        cw_frame_acceleration=zeros3, cw_angular_velocity=zeros3, cw_angular_acceleration=zeros3,
+                        cw_wing_tip_axial=tips, energy_time=None, energy=None, wall_time=1.0)
+
+
+def campbell(orders):
+    speeds = np.linspace(100.0, 1000.0, 10)
+    return Campbell(speeds_rpm=speeds, frequencies=np.tile([366.0, 401.0, 860.0], (10, 1)),
+                    orders=np.asarray(orders, dtype=float),
+                    crossings=[{"order": 30.0, "mode": 0, "speed_rpm": 732.0, "frequency_hz": 366.0}],
+                    system_frequencies=np.tile([170.0, 350.0], (10, 1)),
+                    system_crossings=[{"order": 30.0, "mode": 0, "speed_rpm": 340.0, "frequency_hz": 170.0}])
+
+
+def axis_labels(figure):
+    return [label for ax in figure.axes for label in (ax.get_xlabel(), ax.get_ylabel())]
+
+
+def test_the_time_history_shows_the_steady_window_of_the_wing_amplitude(figures):
+    run = histories()
+    plots.plot_time_history(run, "unused.png")
+    (figure,) = figures
+    steady = steady_part(len(run.time))
+    revolutions = run.crank_angle[steady] / (2 * np.pi)
+    for c, ax in enumerate(figure.axes):
+        lines = ax.get_lines()
+        assert all(np.array_equal(line.get_xdata(), revolutions) for line in lines)
+        torsion = lines[2].get_ydata()
+        # the black line is the torsion the amplitude is defined on: half its peak-to-peak is it
+        assert 0.5 * np.ptp(torsion) == pytest.approx(1e3 * run.wing_amplitude[c], rel=1e-12)
+        assert f"amplitude {1e3 * run.wing_amplitude[c]:.3g} µm" in lines[2].get_label()
+        # the transient (50 µm at the start) is not drawn: the axis is scaled to the steady part
+        assert max(abs(v) for v in ax.get_ylim()) < 10.0
+    assert "steady second half" in figure.axes[0].get_title()
+    assert "wing amplitude" in figure.axes[0].get_title()
+
+
+def test_every_axis_of_the_mbs_plots_has_a_unit_and_micrometres_are_µm(figures):
+    run = histories()
+    spectrum = Spectrum(np.linspace(0.0, 500.0, 50), np.full((50, 2), 1e-3))
+    plots.plot_time_history(run, "unused.png")
+    plots.plot_spectrum(spectrum, "unused.png")
+    plots.plot_spectrum(spectrum, "unused.png", xlabel="engine order (cycles per revolution)")
+    plots.plot_campbell(campbell([0.5, 1.0, 30.0]), "unused.png", operating_rpm=750.0)
+    plots.plot_sweep([600.0, 700.0], np.array([[1e-3, 2e-3], [3e-3, 1e-3]]), "unused.png")
+    labels = [label for figure in figures for label in axis_labels(figure) if label]
+    assert len(labels) == 2 * 2 + 2 + 2 + 2 + 2 - 1  # the time history's upper x axis is shared
+    for label in labels:
+        assert UNIT.search(label), label
+        assert "um" not in label.replace("µm", ""), label
+
+
+def test_the_campbell_legend_names_modes_orders_crossings_and_the_operating_speed(figures):
+    plots.plot_campbell(campbell(list(np.arange(1, 13) * 0.5) + [30.0]), "unused.png", operating_rpm=750.0)
+    labels = [text.get_text() for text in figures[0].axes[0].get_legend().get_texts()]
+    assert labels == ["CW modes, interface held (3)", "coupled multibody model modes (2)",
+                      "engine orders 0.5 … 6 (12, no crossing)", "engine order 30 (f = 30 · rpm / 60)",
+                      "order crosses a CW mode", "order crosses a coupled mode (resonance)",
+                      "operating speed 750 rpm"]
+
+
+def test_a_few_engine_orders_each_get_their_own_legend_entry(figures):
+    plots.plot_campbell(campbell([0.5, 1.0, 30.0]), "unused.png")
+    labels = [text.get_text() for text in figures[0].axes[0].get_legend().get_texts()]
+    assert [label for label in labels if label.startswith("engine order")] == [
+        "engine order 0.5 (f = 0.5 · rpm / 60)", "engine order 1 (f = 1 · rpm / 60)",
+        "engine order 30 (f = 30 · rpm / 60)"]
