@@ -24,7 +24,7 @@ from pipelines.stages import StageCache
 from reduction.body_loads import centrifugal, gravity
 from reduction.elasticity import assemble_elastic_body
 from reduction.errors import InputError
-from reduction.mesh.selection import select_facets, select_nodes
+from reduction.mesh.selection import select_body_nodes, select_facets
 
 COMPONENTS = {"ux": 0, "uy": 1, "uz": 2}
 
@@ -107,12 +107,14 @@ def _body(scene: Scene, name: str, spec: dict, mesh, sets) -> Body:
                                     material.get("density"), quadratic=bool(sets is not None and sets.serendipity))
     fixed = spec.get("fixed", [])
     tables = [("fixed", fixed)] if isinstance(fixed, dict) else [(f"fixed[{k}]", t) for k, t in enumerate(fixed)]
-    supports = [(select_nodes(mesh, table["nodes"], f"bodies.{name}.{where}.nodes", sets),
+    nodes_of = elastic.coordinates  # every node, mid-edge nodes of quadratic elements included
+    supports = [(select_body_nodes(nodes_of, mesh, table["nodes"], f"bodies.{name}.{where}.nodes", sets),
                  tuple(COMPONENTS[c] for c in table.get("components", ["ux", "uy", "uz"][:dim])))
                 for where, table in tables]
     references = {}
     for ref_name, ref in spec.get("reference_points", {}).items():
-        nodes = select_nodes(mesh, ref["nodes"], f"bodies.{name}.reference_points.{ref_name}.nodes", sets)
+        nodes = select_body_nodes(nodes_of, mesh, ref["nodes"], f"bodies.{name}.reference_points.{ref_name}.nodes",
+                                  sets)
         references[ref_name] = ReferencePoint(nodes, np.asarray(ref["position"], float),
                                               bool(ref.get("rotations", False)))
     return Body(name, elastic, np.zeros(0, int), (), references, _body_loads(scene, name, elastic), tuple(supports))

@@ -7,8 +7,9 @@ become the trilinear mesh of their corners carrying 20-node serendipity elements
 from Abaqus *NSET, Abaqus *SURFACE blocks (element faces ``ELSET, S1`` … or node-based; meshio
 drops them, :mod:`reduction.mesh.abaqus` reads them: the nodes of their faces), Gmsh physical
 groups of lower dimension (nodes of those faces/edges) and scikit-fem boundaries; element sets
-from *ELSET, volume physical groups and subdomains. For Hex20 meshes node sets keep their
-corner nodes. Coordinates in mm.
+from *ELSET, volume physical groups and subdomains. Node sets of quadratic meshes (Tet10, Hex20)
+keep the file's mid-edge nodes; a scene's selections add those of edges whose corners a set holds
+(:func:`reduction.mesh.selection.select_body_nodes`). Coordinates in mm.
 """
 
 from __future__ import annotations
@@ -47,7 +48,9 @@ _HEX_CORNERS = np.array([[0, 1, 3, 4], [1, 2, 0, 5], [2, 3, 1, 6], [3, 0, 2, 7],
 class MeshModel:
     """A scikit-fem mesh with named sets.
 
-    points: (n_points, dim) all element nodes, mm (for Tet10 including mid-edge nodes).
+    points: (n_points, dim) all element nodes, mm, numbered as the nodes of the elastic body on
+    ``mesh`` (:class:`reduction.elasticity.ElasticBody`: the vertices, then for Tet10 and Hex20
+    one mid-edge node per mesh edge; ``mesh`` of a Hex20 file holds only the corners).
     node_sets: name -> indices into ``points``; element_sets: name -> element indices (mesh.t columns).
     """
 
@@ -151,17 +154,22 @@ def from_meshio(raw: meshio.Mesh, source: str = "meshio mesh") -> MeshModel:
     compact[used] = np.arange(used.size)
     points = np.ascontiguousarray(points[used])
     serendipity = cell_type == "hexahedron20"
-    if serendipity:  # the corner mesh carries the 20-node elements; sets keep corner nodes
+    if serendipity:  # the corner mesh carries the 20-node elements; points and sets keep every node
         _check_straight_hex20(np.asarray(raw.points, dtype=float)[:, :dim], cells, source)
-        cells = cells[:, :8]
-        used = np.unique(cells)
-        compact = np.full(len(raw.points), -1, dtype=np.int64)
-        compact[used] = np.arange(used.size)
-        points = np.ascontiguousarray(np.asarray(raw.points, dtype=float)[used, :dim])
-    t = compact[cells].T
+        corners = np.unique(cells[:, :8])
+        corner_index = np.full(len(raw.points), -1, dtype=np.int64)
+        corner_index[corners] = np.arange(corners.size)
+        t = corner_index[cells[:, :8]].T
+        vertices = np.asarray(raw.points, dtype=float)[corners, :dim]
+    else:
+        t, vertices = compact[cells].T, points
     if cell_type in ("hexahedron", "hexahedron20"):
         t = t[INV_HEX_MAPPING[:8]]
-    mesh = mesh_type(points.T, np.ascontiguousarray(t))
+    mesh = mesh_type(np.ascontiguousarray(vertices.T), np.ascontiguousarray(t))
+    if cell_type in ("tetra10", "hexahedron20"):
+        order = _body_order(mesh, points, source)
+        compact[used] = order
+        points = np.ascontiguousarray(points[np.argsort(order)])
 
     node_sets = {name: _compact(compact, indices) for name, indices in raw.point_sets.items()}
     element_sets: dict[str, np.ndarray] = {}
@@ -192,6 +200,22 @@ def _check_straight_hex20(points: np.ndarray, cells: np.ndarray, source: str) ->
     if bad.size:
         raise InputError(f"{source}: {bad.size} hexahedron20 elements have curved edges (mid-edge node off the "
                          f"edge midpoint), first element index {bad[0]}; only straight-edged Hex20 are supported")
+
+
+def _body_order(mesh: skfem.Mesh, points: np.ndarray, source: str) -> np.ndarray:
+    """Position of each point of a quadratic mesh in the body's node order (the mesh vertices,
+    then one mid-edge node per mesh edge, :class:`reduction.elasticity.ElasticBody`)."""
+    from scipy.spatial import cKDTree
+
+    if isinstance(mesh, skfem.MeshTet2):
+        body_nodes = mesh.doflocs.T  # the file's own mid-edge nodes (edges may be curved)
+    else:
+        body_nodes = np.vstack([mesh.p.T, 0.5 * (mesh.p.T[mesh.edges[0]] + mesh.p.T[mesh.edges[1]])])
+    order = cKDTree(body_nodes).query(points)[1]
+    if len(points) != len(body_nodes) or np.unique(order).size != len(points):
+        raise InputError(f"{source}: the mid-edge nodes do not match the element edges one to one "
+                         "(each edge of the mesh needs exactly one mid-edge node)")
+    return order
 
 
 def _compact(compact: np.ndarray, file_indices) -> np.ndarray:

@@ -4,8 +4,9 @@ a named node set of a mesh file. Coordinates in mm.
 The geometric tests (:func:`in_box`, :func:`near_plane`, :func:`on_ring`) are written once. The
 ``nodes_*`` functions take node coordinates (n_nodes, dim) and return sorted node indices; a
 scene's selection table (``box``, ``boxes``, ``ring``, ``axis``/``value``, ``set``) goes through
-:func:`select_points`, :func:`select_nodes` and :func:`select_facets`. An empty selection is an
-InputError that says where nothing was found.
+:func:`select_points`, :func:`select_body_nodes` (a body's nodes, mid-edge nodes of quadratic
+elements included) and :func:`select_facets`. An empty selection is an InputError that says where
+nothing was found.
 """
 
 from __future__ import annotations
@@ -114,8 +115,11 @@ def select_points(coordinates: np.ndarray, selection: dict, where: str, sets=Non
         if sets is None:
             raise InputError(f"'{where}.set' names a node set, but the body's mesh is generated, "
                              "not read from a file with named sets")
+        # the set's nodes are numbered as the body's (vertices first); a vertex-only
+        # ``coordinates`` (the corner mesh of Hex20) takes the set's vertices
+        nodes = sets.node_set(selection["set"])
         mask = np.zeros(len(coordinates), dtype=bool)
-        mask[sets.node_set(selection["set"])] = True
+        mask[nodes[nodes < len(coordinates)]] = True
         return mask
     if "box" in selection or "boxes" in selection:
         mask = np.zeros(len(coordinates), dtype=bool)
@@ -132,16 +136,41 @@ def select_points(coordinates: np.ndarray, selection: dict, where: str, sets=Non
     return np.abs(coordinates[:, axis] - selection["value"]) <= tolerance
 
 
-def select_nodes(mesh, selection: dict, where: str, sets=None) -> np.ndarray:
-    """Indices of the nodes of a scikit-fem ``mesh`` in a scene's selection (:func:`select_points`)."""
-    nodes = np.flatnonzero(select_points(mesh.p.T, selection, where, sets))
+def select_body_nodes(coordinates: np.ndarray, mesh, selection: dict, where: str, sets=None) -> np.ndarray:
+    """Rows of a body's node ``coordinates`` (:attr:`reduction.elasticity.ElasticBody.coordinates`:
+    the vertices of ``mesh``, then, for quadratic elements, one mid-edge node per mesh edge) in a
+    scene's selection (:func:`select_points`).
+
+    A geometric selection tests every node, mid-edge nodes included. A named set (numbered as
+    the body's nodes, :class:`reduction.mesh.io.MeshModel`) takes its nodes and, on quadratic
+    elements, the mid-edge node of every boundary edge whose two corners it holds: a set that
+    lists corners only would otherwise leave the faces it clamps or couples partly free.
+    """
+    nodes = np.flatnonzero(select_points(coordinates, selection, where, sets))
+    if "set" in selection:
+        nodes = with_mid_edge_nodes(nodes, mesh, len(coordinates))
     if nodes.size == 0:
         raise InputError(f"'{where}' selects no nodes of the mesh; check its coordinates")
     return nodes
 
 
+def with_mid_edge_nodes(nodes: np.ndarray, mesh, n_nodes: int) -> np.ndarray:
+    """``nodes`` and the mid-edge nodes of the boundary edges of ``mesh`` whose two corners are in
+    ``nodes``, for a body of ``n_nodes`` nodes numbered vertices first, then one node per edge
+    (edges of a 3D mesh, facets of a 2D one); unchanged for linear elements."""
+    edges = mesh.edges if mesh.dim() == 3 else mesh.facets
+    n_vertices = mesh.nvertices
+    if n_nodes != n_vertices + edges.shape[1]:
+        return nodes
+    boundary = mesh.boundary_edges() if mesh.dim() == 3 else mesh.boundary_facets()
+    selected = np.zeros(n_vertices, dtype=bool)
+    selected[nodes[nodes < n_vertices]] = True
+    between = boundary[np.all(selected[edges[:, boundary]], axis=0)]
+    return np.union1d(nodes, n_vertices + between)
+
+
 def select_facets(mesh, selection: dict, where: str, sets=None) -> np.ndarray:
-    """Boundary facets of ``mesh`` whose nodes all lie in a scene's selection."""
+    """Boundary facets of ``mesh`` whose vertices all lie in a scene's selection."""
     boundary = mesh.boundary_facets()
     inside = select_points(mesh.p.T, selection, where, sets)
     facets = boundary[np.all(inside[mesh.facets[:, boundary]], axis=0)]
