@@ -68,8 +68,36 @@ def _merged(base: dict, own: dict) -> dict:
     return out
 
 
+#: keys whose values are files, relative to the scene file that writes them ("*": any name)
+FILE_KEYS = (("bodies", "*", "mesh", "file"), ("coupling", "histories"),
+             ("mbs", "counterweight", "mesh_file"), ("mbs", "gas_pressure", "file"))
+
+
+def _tables(node, keys: tuple):
+    """The tables at ``keys`` (a path of names, "*" for every name) below ``node``."""
+    if not keys:
+        yield node
+        return
+    children = node.values() if keys[0] == "*" else [node.get(keys[0])]
+    for child in children:
+        if isinstance(child, dict):
+            yield from _tables(child, keys[1:])
+
+
+def _anchored(data: dict, folder: Path) -> dict:
+    """``data`` with its relative file paths (:data:`FILE_KEYS`) made absolute from ``folder``: a
+    base scene's files stay where the base is, whichever scene extends it."""
+    for keys in FILE_KEYS:
+        for table in _tables(data, keys[:-1]):
+            value = table.get(keys[-1])
+            if isinstance(value, str) and not Path(value).is_absolute():
+                table[keys[-1]] = str(folder / value)
+    return data
+
+
 def _read(path: Path, seen: tuple = ()) -> dict:
-    """The TOML of a scene file with its ``scene.base`` chain resolved (relative to the file)."""
+    """The TOML of a scene file with its ``scene.base`` chain resolved (relative to the file; the
+    base's own relative files relative to the base)."""
     if not path.is_file():
         raise InputError(f"scene file {path} does not exist")
     try:
@@ -82,7 +110,7 @@ def _read(path: Path, seen: tuple = ()) -> dict:
     base_path = (path.parent / base).resolve()
     if base_path in seen:
         raise InputError(f"{path}: 'scene.base' chain loops back to {base_path}")
-    merged = _merged(_read(base_path, seen + (base_path,)), data)
+    merged = _merged(_anchored(_read(base_path, seen + (base_path,)), base_path.parent), data)
     del merged["scene"]["base"]
     return merged
 
