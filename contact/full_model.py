@@ -1,8 +1,9 @@
 """The same contact problem on the full, uncondensed sparse model: the reference for the condensed one.
 
 Every body keeps all its DOFs. Reference points are coupled (RBE2) and held DOFs removed
-exactly as in :func:`contact.assembly.assemble`; the bodies sit in one global numbering of
-their free DOFs (neither fixed nor prescribed), and Newton solves
+exactly as in :func:`contact.assembly.assemble` (held DOFs of the contact surface, a symmetry
+plane through it, simply drop out of the contact kinematics); the bodies sit in one global
+numbering of their free DOFs (neither fixed nor prescribed), and Newton solves
 
     K·u + K_p·u_p + Gᵀ·λ(G·u) − f(t) = 0,       λ = A·[p, τ] from :mod:`contact.law`,
 
@@ -88,7 +89,8 @@ def build(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, 
     slave_dofs = _surface_dofs(by_name[slave[0]], surfaces[slave[0]], offsets[slave[0]], kept_maps[slave[0]], index)
     master_dofs = _surface_dofs(by_name[master[0]], surfaces[master[0]], offsets[master[0]], kept_maps[master[0]],
                                 index)
-    G = kinematic_operator(pairing, slave_dofs, master_dofs, free.size)
+    # held surface DOFs point at one extra column, dropped: they do not move
+    G = kinematic_operator(pairing, slave_dofs, master_dofs, free.size + 1)[:, :free.size].tocsr()
     patterns, force, motion = _pattern_columns(load_vectors, motion_vectors, free, prescribed)
     where = _control_labels(labels, index, prescribed)
     return FullModel(stiffness=stiffness_all[free][:, free].tocsr(),
@@ -168,11 +170,11 @@ def _free_numbering(n_all: int, fixed_all: list[np.ndarray], prescribed: np.ndar
 
 
 def _surface_dofs(body: Body, surface: Surface, offset: int, kept: np.ndarray, index: np.ndarray) -> np.ndarray:
-    """(n_surface_nodes, dim) free global DOFs of a body's contact surface."""
+    """(n_surface_nodes, dim) free global DOFs of a body's contact surface; a DOF held by a support
+    through the surface (a symmetry plane) is ``n_free``, one past the free DOFs (coupled surface
+    nodes were refused in :func:`_body_block`)."""
     dofs = index[offset + kept[body.elastic.node_dofs[surface.nodes]]]
-    if np.any(dofs < 0):
-        raise InputError(f"body {body.name}: fixed nodes overlap the contact surface")
-    return dofs
+    return np.where(dofs < 0, np.count_nonzero(index >= 0), dofs)
 
 
 def _pattern_columns(load_vectors: dict, motion_vectors: dict, free: np.ndarray, prescribed: np.ndarray):
