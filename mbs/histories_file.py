@@ -26,10 +26,12 @@ import h5py
 import numpy as np
 import skfem
 from scipy.spatial import cKDTree
+from skfem.io.meshio import HEX_MAPPING, INV_HEX_MAPPING
 
 from mbs.counterweight import corner_tetrahedra, torsion_mode_index, wing_tip_points
 from mbs.loading import MultibodyLoading
 from reduction.errors import InputError
+from reduction.mesh.io import HEX20_EDGES
 
 FORMAT = "fretwork-interface-histories"
 MODES_FORMAT = "fretwork-mode-shapes"
@@ -62,14 +64,17 @@ _MODAL_SUFFIX = {"modal_coordinate": "", "modal_velocity": "/s", "modal_accelera
 #: a step may differ from the median step by this fraction (fixed-step output rounded in time)
 STEP_TOLERANCE = 1e-6
 MIN_SAMPLES = 8
+#: cell types of the mode shapes' elements → nodes per cell (meshio/Abaqus node order)
+CELL_TYPES = {"tetra": 4, "tetra10": 10, "hexahedron": 8, "hexahedron20": 20}
 
 
 @dataclass(frozen=True)
 class ModeShapes:
     """The CW's mode shapes in our units: node_coordinates (n, 3) mm in the CW frame, shapes
     (n, 3, m) mm per unit modal coordinate, frequencies (m,) Hz (fixed interface), torsion_mode
-    (0-based index, or -1: found from the wing tips), cells (n_c, 4 or 10) node indices of tetra
-    or tetra10 elements, or None: the elements are those of the scene's CW mesh;
+    (0-based index, or -1: found from the wing tips), cells (n_c, 4, 10, 8 or 20) node indices of
+    tetra, tetra10, hexahedron or hexahedron20 elements (:data:`CELL_TYPES`), or None: the
+    elements are those of the scene's CW mesh;
     coordinate_unit: the unit of the modal coordinates these shapes take (:data:`_SHAPE`)."""
 
     node_coordinates: np.ndarray
@@ -177,8 +182,20 @@ def _wing_tips(mesh: skfem.MeshTet1) -> np.ndarray:
 
 def _p2_field(modes: ModeShapes, cw_mesh, source: str) -> tuple[skfem.MeshTet1, np.ndarray]:
     """The linear tetrahedral mesh of the mode shapes and the shapes (3·n_nodes, m) in the
-    node-interleaved P2 DOF order of that mesh (:class:`reduction.modal_loads.ModeField`)."""
-    if modes.cells is not None:
+    node-interleaved P2 DOF order of that mesh (:class:`reduction.modal_loads.ModeField`).
+
+    Hexahedra (the file's cells, or the scene's CW mesh) are split into tetrahedra; the P2 nodes
+    the shapes are not given at (midpoints of the split's diagonals, and of the edges of Hex8)
+    take the value of the hexahedron's own field (trilinear, or serendipity for Hex20)."""
+    hexes = None
+    if modes.cells is not None and modes.cells.shape[1] in (8, 20):
+        hexes = modes.cells
+        vertices = np.unique(hexes[:, :8])
+        compact = np.full(len(modes.node_coordinates), -1)
+        compact[vertices] = np.arange(vertices.size)
+        mesh = corner_tetrahedra(skfem.MeshHex1(np.ascontiguousarray(modes.node_coordinates[vertices].T),
+                                                np.ascontiguousarray(compact[hexes[:, :8]].T[INV_HEX_MAPPING[:8]])))
+    elif modes.cells is not None:
         corners = modes.cells[:, :4]
         vertices = np.unique(corners)
         compact = np.full(len(modes.node_coordinates), -1)
@@ -190,6 +207,8 @@ def _p2_field(modes: ModeShapes, cw_mesh, source: str) -> tuple[skfem.MeshTet1, 
                          "('coupling.body', a mesh file) must give their elements")
     else:
         mesh = corner_tetrahedra(cw_mesh)
+        if isinstance(cw_mesh, skfem.MeshHex1):
+            hexes = _hexes_at_nodes(cw_mesh, modes.node_coordinates)
     basis = skfem.Basis(mesh, skfem.ElementVector(skfem.ElementTetP2()), intorder=1)
     nodes = basis.doflocs[:, 0::3].T
     n_vertices = mesh.p.shape[1]
@@ -197,7 +216,13 @@ def _p2_field(modes: ModeShapes, cw_mesh, source: str) -> tuple[skfem.MeshTet1, 
     distance, index = cKDTree(modes.node_coordinates).query(nodes)
     found = distance <= 1e-6 * span
     m = modes.shapes.shape[2]
-    if found.all():
+    if hexes is not None and found[:n_vertices].all() and not found.all():
+        field = np.empty((len(nodes), 3, m))
+        field[found] = modes.shapes[index[found]]
+        missing = np.flatnonzero(~found)
+        ends = index[mesh.edges[:, missing - n_vertices]]
+        field[missing] = _hexahedron_values(hexes, ends, modes.shapes, source)
+    elif found.all():
         field = modes.shapes[index]
     elif found[:n_vertices].all():
         # linear shapes at the vertices: the P2 field of the same (linear) shape takes edge means
@@ -210,6 +235,59 @@ def _p2_field(modes: ModeShapes, cw_mesh, source: str) -> tuple[skfem.MeshTet1, 
                          f"{int((~found[:n_vertices]).sum())} of the {n_vertices} CW mesh nodes have none "
                          f"(first at {missing.round(3).tolist()} mm): give them on the nodes of the CW mesh")
     return mesh, np.ascontiguousarray(field.reshape(-1, m))
+
+
+def _hexes_at_nodes(mesh: skfem.MeshHex1, coordinates: np.ndarray) -> np.ndarray | None:
+    """The hexahedra of ``mesh`` (meshio/Abaqus node order) as indices of the shape nodes at
+    ``coordinates``: 20 nodes when the shapes are given at every mid-edge point, 8 when only at
+    the corners, None when not even at the corners (the caller names the missing nodes)."""
+    span = float(np.ptp(coordinates, axis=0).max())
+    corners = mesh.p.T[mesh.t.T[:, HEX_MAPPING[:8]]]
+    points = np.concatenate([corners, 0.5 * (corners[:, HEX20_EDGES[:, 0]] + corners[:, HEX20_EDGES[:, 1]])], axis=1)
+    distance, index = cKDTree(coordinates).query(points.reshape(-1, 3))
+    distance, index = distance.reshape(-1, 20), index.reshape(-1, 20)
+    found = distance <= 1e-6 * span
+    if found.all():
+        return index
+    return index[:, :8] if found[:, :8].all() else None
+
+
+#: reference coordinates of the nodes of a meshio/Abaqus hexahedron20 (the first 8: hexahedron)
+_HEX_REFERENCE = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
+                           [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)
+_HEX_REFERENCE = np.vstack([_HEX_REFERENCE, 0.5 * (_HEX_REFERENCE[HEX20_EDGES[:, 0]] + _HEX_REFERENCE[HEX20_EDGES[:, 1]])])
+
+
+def hexahedron_shape_functions(xi: np.ndarray, n_nodes: int) -> np.ndarray:
+    """(k, n_nodes) shape functions of the trilinear (8) or serendipity (20) hexahedron at the
+    reference points ``xi`` (k, 3) in [-1, 1]³, meshio/Abaqus node order."""
+    corners = _HEX_REFERENCE[:8]
+    linear = np.prod(1.0 + xi[:, None, :] * corners[None], axis=2) / 8.0
+    if n_nodes == 8:
+        return linear
+    corner = linear * (np.sum(xi[:, None, :] * corners[None], axis=2) - 2.0)
+    middle = _HEX_REFERENCE[8:]
+    mid_edge = np.prod(np.where(middle[None] == 0.0, 1.0 - xi[:, None, :] ** 2, 1.0 + xi[:, None, :] * middle[None]),
+                       axis=2) / 4.0
+    return np.hstack([corner, mid_edge])
+
+
+def _hexahedron_values(hexes: np.ndarray, ends: np.ndarray, shapes: np.ndarray, source: str) -> np.ndarray:
+    """(k, 3, m) shapes at the midpoints of k segments between two corners of one hexahedron
+    (``ends`` (2, k) node indices), from that hexahedron's field at the reference midpoint."""
+    pairs = np.array([(a, b) for a in range(8) for b in range(a + 1, 8)])
+    first, second = hexes[:, pairs[:, 0]], hexes[:, pairs[:, 1]]
+    size = int(hexes.max()) + 1
+    keys = (np.minimum(first, second) * size + np.maximum(first, second)).ravel()
+    order = np.argsort(keys, kind="stable")
+    wanted = np.minimum(*ends) * size + np.maximum(*ends)
+    position = np.minimum(np.searchsorted(keys[order], wanted), keys.size - 1)
+    if np.any(keys[order][position] != wanted):
+        raise InputError(f"{source}: the tetrahedra split from the hexahedral cells do not lie in the cells")
+    cell, pair = np.divmod(order[position], len(pairs))
+    xi = 0.5 * (_HEX_REFERENCE[pairs[pair, 0]] + _HEX_REFERENCE[pairs[pair, 1]])
+    weights = hexahedron_shape_functions(xi, hexes.shape[1])
+    return np.einsum("kn,knam->kam", weights, shapes[hexes[cell]])
 
 
 # ---------------------------------------------------------------- writing
@@ -264,7 +342,7 @@ def _write_hdf5(path: Path, histories: InterfaceHistories, producer: str) -> Non
                 group.create_dataset(name, data=np.asarray(values, dtype=np.float64)).attrs["unit"] = unit
             if modes.cells is not None:
                 cells = group.create_dataset("cells", data=modes.cells)
-                cells.attrs["cell_type"] = "tetra10" if modes.cells.shape[1] == 10 else "tetra"
+                cells.attrs["cell_type"] = {width: name for name, width in CELL_TYPES.items()}[modes.cells.shape[1]]
 
 
 def _header(quantity, labels, unit) -> list[str]:
@@ -450,9 +528,9 @@ def _mode_shapes(path: Path, attrs: dict, datasets: dict, cells, cell_type) -> M
                          f"frequency per mode; got {shapes.shape}, {coordinates.shape}, {frequencies.shape}")
     if cells is not None:
         cells = np.asarray(cells, dtype=np.int64)
-        if cell_type not in ("tetra", "tetra10") or cells.ndim != 2 or cells.shape[1] != (4 if cell_type == "tetra" else 10):
-            raise InputError(f"{path}: mode-shape cells must be tetra (n, 4) or tetra10 (n, 10), got "
-                             f"{cell_type!r} {cells.shape}")
+        if cells.ndim != 2 or cells.shape[1] != CELL_TYPES.get(cell_type):
+            raise InputError(f"{path}: mode-shape cells must be tetra (n, 4), tetra10 (n, 10), hexahedron (n, 8) or "
+                             f"hexahedron20 (n, 20), got {cell_type!r} {cells.shape}")
         if cells.min() < 0 or cells.max() >= len(coordinates):
             raise InputError(f"{path}: mode-shape cells refer to nodes outside 0 … {len(coordinates) - 1}")
     torsion = int(attrs.get("torsion_mode", 0))

@@ -186,16 +186,16 @@ def from_meshio(raw: meshio.Mesh, source: str = "meshio mesh") -> MeshModel:
                      serendipity=serendipity)
 
 
-# mid-edge nodes 8 … 19 of a meshio/Abaqus hexahedron20 and the corners of their edges
-_HEX20_EDGES = np.array([[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4],
+#: mid-edge nodes 8 … 19 of a meshio/Abaqus hexahedron20 (C3D20): the corners of their edges
+HEX20_EDGES = np.array([[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4],
                          [0, 4], [1, 5], [2, 6], [3, 7]])
 
 
 def _check_straight_hex20(points: np.ndarray, cells: np.ndarray, source: str) -> None:
     """The serendipity elements on the corner mesh put mid-edge nodes at the edge midpoints."""
-    midpoints = 0.5 * (points[cells[:, _HEX20_EDGES[:, 0]]] + points[cells[:, _HEX20_EDGES[:, 1]]])
+    midpoints = 0.5 * (points[cells[:, HEX20_EDGES[:, 0]]] + points[cells[:, HEX20_EDGES[:, 1]]])
     offset = np.linalg.norm(points[cells[:, 8:20]] - midpoints, axis=-1)
-    length = np.linalg.norm(points[cells[:, _HEX20_EDGES[:, 1]]] - points[cells[:, _HEX20_EDGES[:, 0]]], axis=-1)
+    length = np.linalg.norm(points[cells[:, HEX20_EDGES[:, 1]]] - points[cells[:, HEX20_EDGES[:, 0]]], axis=-1)
     bad = np.flatnonzero(np.any(offset > 1e-6 * length, axis=1))
     if bad.size:
         raise InputError(f"{source}: {bad.size} hexahedron20 elements have curved edges (mid-edge node off the "
