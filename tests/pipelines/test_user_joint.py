@@ -4,7 +4,6 @@ input: each a single message, exit status 2, nothing written."""
 from __future__ import annotations
 
 import re
-import shutil
 from pathlib import Path
 
 import meshio
@@ -26,9 +25,8 @@ SCENE = EXAMPLES / "user_joint.toml"
 
 
 def _extended(tmp_path, text: str) -> Path:
-    """A scene extending the example; its mesh files beside it (a base's files are found from the
-    extending scene's folder)."""
-    shutil.copytree(EXAMPLES / "user_joint", tmp_path / "user_joint", dirs_exist_ok=True)
+    """A scene in ``tmp_path`` extending the example: the example's mesh files are found from the
+    example's folder, the extending scene's own files from ``tmp_path``."""
     path = tmp_path / "scene.toml"
     path.write_text(f'[scene]\nbase = "{SCENE}"\n{text}\n')
     return path
