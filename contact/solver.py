@@ -13,12 +13,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from threadpoolctl import ThreadpoolController
 
 from contact.law import (ContactLaw, ContactState, Response, Status, advance, evaluate,
                          wear_increment)
 from contact.linear import KrylovSettings, NewtonLinearSolver, tangent_blocks
 from contact.structure import ContactSpace
+from reduction.threads import blas_threads
 
 
 class ConvergenceError(RuntimeError):
@@ -135,7 +135,6 @@ class ContactSolver:
         self.law = law
         self.settings = settings
         self.linear = linear if linear is not None else NewtonLinearSolver(space, settings.linear)
-        self._threads = ThreadpoolController()
         structure = space.structure
         self.dim = structure.dim
         self.n_points = structure.n_points
@@ -382,7 +381,7 @@ class ContactSolver:
         point status and the iteration counters. Raises :class:`ConvergenceError` when a
         sub-step of that smallest size still fails.
         """
-        with self._threads.limit(limits=self.settings.blas_threads, user_api="blas"):
+        with blas_threads(self.settings.blas_threads):
             return advance_with_cutbacks(self, start, state, amplitudes, effects)
 
 

@@ -22,16 +22,38 @@ for good (:func:`pin_process`); a limited block then restores one thread on exit
 
 from __future__ import annotations
 
+import sys
 from contextlib import contextmanager
 
 from threadpoolctl import ThreadpoolController
 
+_controller: tuple[int, ThreadpoolController] | None = None
+
+
+def blas_controller() -> ThreadpoolController:
+    """The process's BLAS libraries, as threadpoolctl sees them.
+
+    Finding them walks every loaded shared object (3 ms), more than a small contact
+    increment costs, and a finite-sliding run builds a solver and a contact space at every
+    re-pairing; so the scan is kept while no module has been imported since (a BLAS comes
+    with the extension module that loads it: NumPy, SciPy, MKL with PARDISO).
+    """
+    global _controller
+    if _controller is None or _controller[0] != len(sys.modules):
+        _controller = (len(sys.modules), ThreadpoolController())
+    return _controller[1]
+
 
 @contextmanager
+def blas_threads(limit: int):
+    """BLAS (OpenBLAS, MKL) limited to ``limit`` threads inside the block."""
+    with blas_controller().limit(limits=limit, user_api="blas"):
+        yield
+
+
 def single_threaded_blas():
     """BLAS (OpenBLAS, MKL) limited to one thread inside the block."""
-    with ThreadpoolController().limit(limits=1, user_api="blas"):
-        yield
+    return blas_threads(1)
 
 
 def pin_process() -> None:
@@ -47,4 +69,4 @@ def pin_process() -> None:
     for module in ("numpy", "scipy.linalg", "scipy.sparse.linalg"):
         importlib.import_module(module)
     pardiso.available()  # loads MKL where pypardiso is installed
-    ThreadpoolController().limit(limits=1, user_api="blas")
+    blas_controller().limit(limits=1, user_api="blas")

@@ -33,8 +33,12 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
                            :func:`write_driving_histories`): ``fretwork export-fmu`` plays them back
 
 The file is written as ``results.h5.part`` and renamed when the run completes, so a
-``results.h5`` is never half-written; the part file is flushed every cycle and can be read
-after an interruption.
+``results.h5`` is never half-written. Rows are kept in memory and written in blocks: at every
+checkpoint, at least every ``flush_seconds`` of wall time (checked at the end of a cycle),
+when a run fails or is interrupted, and at the end; the part file can then be read after an
+interruption up to its last block. (Written row by row, the file cost 30-80 ms per cycle,
+1.5-2 ms per increment of a 12- or 40-increment cycle: as much as the contact solve of a
+small interface. When a block is written changes no value in it.)
 """
 
 from __future__ import annotations
@@ -42,6 +46,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import time
 from pathlib import Path
 
 import h5py
@@ -96,10 +101,6 @@ def _append_rows(group: h5py.Group, name: str, rows, units: str) -> None:
         dataset[start:] = rows
 
 
-def _append(group: h5py.Group, name: str, row, units: str) -> None:
-    _append_rows(group, name, np.asarray(row)[None], units)
-
-
 def write_driving_histories(root: h5py.Group, coupled) -> None:
     """``/histories``: the multibody histories a coupled run's loads come from
     (:class:`pipelines.coupling.Coupled`), in the layout ``fretwork mbs`` writes, so that
@@ -119,7 +120,8 @@ class ResultsWriter(Observer):
     """
 
     def __init__(self, path: Path, model, space, *, record_every: int = 1, progress=None,
-                 track_energy: bool = True, resume: bool = False, field_output=None):
+                 track_energy: bool = True, resume: bool = False, field_output=None,
+                 flush_seconds: float = 10.0):
         self.final_path = Path(path)
         self.part_path = self.final_path.with_suffix(".h5.part")
         self.checkpoint_path = self.final_path.with_name("checkpoint.h5")
@@ -128,8 +130,10 @@ class ResultsWriter(Observer):
         self.progress = progress
         self.meter = EnergyMeter(space, model.law) if track_energy else None
         self.labels = model.assembly.structure.labels
-        self._rows: dict[str, list] = {}
+        self.flush_seconds = flush_seconds
+        self._rows: dict[str, dict[str, list]] = {"increments": {}, "cycles": {}}
         self._units: dict[str, str] = {}
+        self._flushed_at = time.monotonic()
         self.snapshot = None
         self.area = space.structure.area
         self.output_increments = output_increments(field_output, model.procedure.increments_per_cycle)
@@ -173,8 +177,7 @@ class ResultsWriter(Observer):
 
     def checkpoint(self, snapshot) -> None:
         """Write ``checkpoint.h5`` atomically: results so far + ``/checkpoint`` snapshot."""
-        self._flush_increments()
-        self.file.flush()
+        self._flush()
         self.file.close()
         temporary = self.checkpoint_path.with_suffix(".h5.tmp")
         shutil.copyfile(self.part_path, temporary)
@@ -193,17 +196,22 @@ class ResultsWriter(Observer):
         if self.progress is not None:
             self.progress.phase(name, n_cycles)
 
-    def _row(self, name: str, value, units: str) -> None:
-        self._rows.setdefault(name, []).append(value)
-        self._units[name] = units
+    def _row(self, name: str, value, units: str, group: str = "increments") -> None:
+        self._rows[group].setdefault(name, []).append(value)
+        self._units[f"{group}/{name}"] = units
 
-    def _flush_increments(self) -> None:
-        group = self.file["increments"]
-        for name, rows in self._rows.items():
-            _append_rows(group, name, np.array(rows), self._units[name])
-        if "bolt_forces" in group:
-            group["bolt_forces"].attrs["bolts"] = ",".join(self.model.assembly.structure.bolts.names)
-        self._rows = {}
+    def _flush(self) -> None:
+        """Write the rows kept since the last flush, and flush the file."""
+        for group_name, rows in self._rows.items():
+            group = self.file[group_name]
+            for name, values in rows.items():
+                _append_rows(group, name, np.array(values), self._units[f"{group_name}/{name}"])
+        if "bolt_forces" in self.file["increments"]:
+            self.file["increments/bolt_forces"].attrs["bolts"] = ",".join(self.model.assembly.structure.bolts.names)
+        self._rows = {"increments": {}, "cycles": {}}
+        self._flush_increment_fields()
+        self.file.flush()
+        self._flushed_at = time.monotonic()
 
     def increment(self, record: IncrementRecord) -> None:
         self._row("time", record.time, "cycles")
@@ -261,20 +269,19 @@ class ResultsWriter(Observer):
         self._increment_fields = []
 
     def cycle(self, summary: CycleSummary) -> None:
-        self._flush_increments()
-        group = self.file["cycles"]
         recorded = self._recorded(summary.cycle)
-        _append(group, "cycle", summary.cycle, "1")
-        _append(group, "phase", PHASES.index(summary.phase), "0 preload, 1 cof, 2 wear")
-        _append(group, "equivalent_cycles", summary.equivalent_cycles, "cycles")
+        self._row("cycle", summary.cycle, "1", "cycles")
+        self._row("phase", PHASES.index(summary.phase), "0 preload, 1 cof, 2 wear", "cycles")
+        self._row("equivalent_cycles", summary.equivalent_cycles, "cycles", "cycles")
         for name, value in summary.figures.items():
-            _append(group, f"figures/{name}", np.nan if value is None else value, "see README")
+            self._row(f"figures/{name}", np.nan if value is None else value, "see README", "cycles")
         if recorded:
-            _append(group, "fields/cycle", summary.cycle, "1")
+            self._row("fields/cycle", summary.cycle, "1", "cycles")
             for name, value in self._fields(summary).items():
-                _append(group, f"fields/{name}", value, FIELD_UNITS[name])
-        self._flush_increment_fields()
-        self.file.flush()
+                # copied: a field may be a view of state the run goes on to change
+                self._row(f"fields/{name}", np.array(value), FIELD_UNITS[name], "cycles")
+        if time.monotonic() - self._flushed_at >= self.flush_seconds:
+            self._flush()
         if self.progress is not None:
             self.progress.cycle(summary)
 
@@ -295,7 +302,7 @@ class ResultsWriter(Observer):
 
     def finish(self, result) -> Path:
         """Write the final fields and the summary, close, and move the file into place."""
-        self._flush_increments()
+        self._flush()
         if "control/displacement" in self.file["increments"]:
             self.file["increments/control"].attrs["dofs"] = ",".join(self.labels)
             rotation = [label.rsplit(".", 1)[-1].startswith("r") for label in self.labels]  # rx, ry, rz
@@ -316,8 +323,9 @@ class ResultsWriter(Observer):
         return self.final_path
 
     def abort(self) -> None:
-        """Close the file after a failure; the part file stays for inspection."""
+        """Write what is kept and close the file after a failure; the part file stays for inspection."""
         if self.file.id.valid:
+            self._flush()
             self.file.close()
 
 

@@ -22,7 +22,7 @@ SCENES = os.environ.get("FRETWORK_BENCH_DETERMINISM_SCENES",
 UNPINNED = ("import contextlib, sys, reduction.threads as t; t.single_threaded_blas = contextlib.nullcontext; "
             "t.pin_process = lambda: None; "
             "import contact.solver as s; "
-            "s.ThreadpoolController = type('Free', (), {'limit': lambda self, **k: contextlib.nullcontext()}); "
+            "s.blas_threads = lambda limit: contextlib.nullcontext(); "
             "from pipelines.cli.main import main; sys.exit(main(sys.argv[1:]))")
 
 
