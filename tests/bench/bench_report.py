@@ -226,13 +226,13 @@ COLUMNS = ("solver", "points", "dofs", "setup_s", "increment_mean_s", "increment
            "speedup_cpu", "rel_diff")
 
 
-def format_table(rows: list[dict]) -> str:
-    """Fixed-width text table of benchmark summaries."""
-    width = {c: max(len(c), 9) for c in COLUMNS}
-    lines = [" ".join(f"{c:>{width[c]}}" for c in COLUMNS)]
+def format_table(rows: list[dict], columns: tuple[str, ...] = COLUMNS) -> str:
+    """Fixed-width text table of benchmark summaries (``columns``: which keys, in order)."""
+    width = {c: max(len(c), 9) for c in columns}
+    lines = [" ".join(f"{c:>{width[c]}}" for c in columns)]
     for row in rows:
         cells = []
-        for c in COLUMNS:
+        for c in columns:
             value = row.get(c, "")
             cells.append(f"{value:>{width[c]}.4g}" if isinstance(value, float) else f"{value!s:>{width[c]}}")
         lines.append(" ".join(cells))
