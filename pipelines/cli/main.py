@@ -499,7 +499,7 @@ def _check_input(args) -> None:
 
 def _output(args):
     """The claim on the command's output folder (nullcontext for a command that writes none)."""
-    from pipelines.output.locks import check_folder, claim
+    from pipelines.output.locks import PARTIAL, check_folder, claim
 
     if args.command == "export-fmu":
         check_folder(Path(args.output).parent, "-o")
@@ -519,7 +519,9 @@ def _output(args):
                   file=sys.stderr)
             outputs = ()  # the folder holds more than this sweep: nothing else is removed
         out = folder
-    return claim(out, outputs=outputs, ready=lambda: _check_input(args))
+    # only `run` resumes: elsewhere a checkpoint of an interrupted run is a half-written output
+    partial = PARTIAL if args.command == "run" else (*PARTIAL, "**/checkpoint.h5")
+    return claim(out, outputs=outputs, ready=lambda: _check_input(args), partial=partial)
 
 
 def _unexpected(error: BaseException) -> str:
@@ -529,6 +531,17 @@ def _unexpected(error: BaseException) -> str:
         where = f"{error.filename}: " if error.filename else ""
         return f"{where}{error.strerror or error}"
     return f"internal error ({type(error).__name__}: {error}); set FRETWORK_TRACEBACK=1 to see where"
+
+
+def _stopped_hint(args, error) -> str:
+    from pipelines.jobs.run import EARLY_ENDINGS
+
+    ending = getattr(error, "ending", None)
+    if ending in EARLY_ENDINGS:
+        return f"; the results file holds the cycles run so far, marked '{ending.value}'"
+    out = getattr(args, "out", None)
+    return (f"; partial results stay in {out}: after changing the scene, run again "
+            "(or --resume from its last checkpoint)") if out else ""
 
 
 def main(argv=None) -> int:
@@ -557,10 +570,7 @@ def _main(argv) -> int:
         print(f"fretwork: error: {error}", file=sys.stderr)
         return 2
     except ConvergenceError as error:
-        out = getattr(args, "out", None)
-        hint = (f"; partial results stay in {out}: after changing the scene, run again "
-                "(or --resume from its last checkpoint)") if out else ""
-        print(f"fretwork: error: the simulation stopped: {error}{hint}", file=sys.stderr)
+        print(f"fretwork: error: the simulation stopped: {error}{_stopped_hint(args, error)}", file=sys.stderr)
         return 1
     except (OSError, UnicodeDecodeError) as error:  # a file that cannot be read or written
         print(f"fretwork: error: {_unexpected(error)}", file=sys.stderr)

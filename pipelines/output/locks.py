@@ -10,6 +10,7 @@
 - the outputs an earlier run of the command left there (its ``outputs``: names or glob
   patterns) are removed, said in one note line, so that old plots never stand beside new ones;
   only once the command's input has been checked (``ready``): a refused input loses nothing;
+- when the command is interrupted (Ctrl-C), its half-written files (``*.part``, ``*.tmp``) go;
 - when the command fails, the folders the claim created are removed again if they are empty:
   a refused input leaves nothing behind.
 """
@@ -29,6 +30,10 @@ from reduction.errors import InputError
 LOCK_NAME = ".fretwork.lock"
 #: Kernel and device folders: never a place for results.
 SYSTEM_FOLDERS = (Path("/proc"), Path("/sys"), Path("/dev"))
+#: Half-written files, removed when a command is interrupted: a results file being written
+#: (results.h5.part: the run's whole files are its results.h5 and checkpoint.h5) and the
+#: temporary files of atomic writes.
+PARTIAL = ("**/*.part", "**/*.tmp")
 #: A lock file younger than this without a process id is being written by its owner.
 _FRESH_LOCK_S = 10.0
 
@@ -132,12 +137,14 @@ def _clear(folder: Path, outputs: Iterable[str], option: str, note: Callable[[st
 
 @contextmanager
 def claim(path, *, outputs: Iterable[str] = (), ready: Callable[[], object] | None = None,
-          option: str = "--out", note: Callable[[str], None] = _note) -> Iterator[Path]:
+          partial: Iterable[str] = PARTIAL, option: str = "--out",
+          note: Callable[[str], None] = _note) -> Iterator[Path]:
     """Check, create, lock and clear the output folder ``path`` for the block (module doc).
 
     outputs: names or glob patterns of what the command writes there, removed first (pass none
     to keep everything, e.g. to resume). ready: checks the command's input (raises InputError)
-    before anything is removed. note: where the one-line note about removed outputs goes.
+    before anything is removed. partial: patterns of half-written files, removed when the block
+    is interrupted (Ctrl-C). note: where the one-line note about removed outputs goes.
     """
     folder = check_folder(path, option)
     created = _make(folder, option)
@@ -152,11 +159,24 @@ def claim(path, *, outputs: Iterable[str] = (), ready: Callable[[], object] | No
             ready()
         _clear(folder, outputs, option, note)
         yield folder
-    except BaseException:
+    except BaseException as error:
+        if isinstance(error, KeyboardInterrupt):
+            _remove_partial(folder, partial)
         lock.unlink(missing_ok=True)
         _remove_empty(created)
         raise
     lock.unlink(missing_ok=True)
+
+
+def _remove_partial(folder: Path, patterns: Iterable[str]) -> None:
+    """Remove the files matching ``patterns`` below ``folder``, then the empty folders below it."""
+    for pattern in patterns:
+        for path in folder.glob(pattern):
+            if path.is_file():
+                path.unlink(missing_ok=True)
+    for parent, _, _ in sorted(os.walk(folder), key=lambda entry: -len(Path(entry[0]).parts)):
+        if Path(parent) != folder and not any(Path(parent).iterdir()):
+            Path(parent).rmdir()
 
 
 def _remove_empty(created: list[Path]) -> None:
