@@ -163,7 +163,7 @@ def cmd_sweep(args) -> int:
         return args.multibody_handler(args)
     from pipelines.jobs.sweep import parse_speeds, sweep_paths
     from pipelines.jobs.limit import parse_range_um
-    from pipelines.jobs.margins import margin_sweep, plot_margins
+    from pipelines.jobs.margins import describe_margins, margin_sweep, plot_margins
     from pipelines import scene as scenes
 
     speeds = parse_speeds(args.speeds)
@@ -180,11 +180,13 @@ def cmd_sweep(args) -> int:
         print(_json(summary))
     else:
         print(f"{'rpm':>8} {'wing µm':>9} {'margin':>8}")
-        for speed, amplitude, margin in zip(result.speeds_rpm, result.wing_amplitude_mm, result.margin):
-            print(f"{speed:8.1f} {1e3 * amplitude:9.1f} {margin:8.2f}" + ("  < 1: NOT SAFE" if margin < 1 else ""))
-        limit = "below the searched range" if summary["limit_um"] is None else f"{summary['limit_um']:.1f} µm"
+        flags = {"unsafe": "  < 1: UNSAFE", "at the limit": "  at the limit (within the tolerance)", "safe": ""}
+        for k, (speed, amplitude, margin) in enumerate(zip(result.speeds_rpm, result.wing_amplitude_mm, result.margin)):
+            print(f"{speed:8.1f} {1e3 * amplitude:9.1f} {margin:8.2f}{flags[result.state(k)]}")
+        limit = "above the searched range" if summary["limit_um"] is None else f"{summary['limit_um']:.1f} µm"
         print(f"amplitude limit {limit} (searched at {result.limit_speed_rpm:.0f} rpm); "
               f"calibration factor {result.calibration:.4g}")
+        print(describe_margins(result))
         print(f"results: {out}, plot: {plot}")
     return 0
 

@@ -58,12 +58,13 @@ class ProgressBar:
                              stick=f"{figures['stick_area_fraction']:.2f}", refresh=False)
         self.bar.update(1)
 
-    def close(self, reason: str | None = None):
-        """Close the bar; with ``reason`` (why the run ended) it ends full: a run that settles
-        early needs no more cycles, it did not abort."""
+    def close(self, reason: str | None = None, *, done: bool = False):
+        """Close the bar, saying ``reason`` (why the run ended); ``done``: the run answered its
+        question and the bar ends full (a run that shakes down early needs no more cycles)."""
         self._stop_clock()
         if reason is not None and not self.bar.disable:
-            self.bar.total = self.bar.n
+            if done:
+                self.bar.total = self.bar.n
             self.bar.set_postfix_str(reason, refresh=False)
             self.bar.refresh()
         self.bar.close()
@@ -145,7 +146,7 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
         writer.abort()
         bar.close()
         raise
-    bar.close(ENDINGS[result.ending])
+    bar.close(ENDINGS[result.ending], done=True)
     stage_times.update({f"{name}_phase_s": seconds for name, seconds in bar.phase_times.items()})
     stage_times["procedure_s"] = time.perf_counter() - clock
     clock = time.perf_counter()
