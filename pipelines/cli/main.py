@@ -15,6 +15,7 @@ import math
 import os
 import re
 import sys
+import threading
 from contextlib import nullcontext
 from pathlib import Path
 
@@ -564,6 +565,10 @@ def _main(argv) -> int:
     from reduction.threads import pin_process
 
     pin_process()  # the same scene gives the same bits whatever the thread settings
+    # Progress bars are drawn by this process alone: a thread lock, not tqdm's default
+    # multiprocessing lock, whose semaphore a Ctrl-C could leave behind (a "leaked semaphore" warning).
+    from tqdm import tqdm
+    tqdm.set_lock(threading.RLock())
 
     try:
         with _output(args):
