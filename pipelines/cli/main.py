@@ -14,6 +14,7 @@ import json
 import math
 import os
 import re
+import signal
 import sys
 import threading
 from contextlib import nullcontext
@@ -547,13 +548,41 @@ def _stopped_hint(args, error) -> str:
             "(or --resume from its last checkpoint)") if out else ""
 
 
+def _interrupt(signum, frame):
+    """Ctrl-C: interrupt the command once. Its clean-up (closing a cluster, removing half-written
+    files) then runs to the end: a second Ctrl-C, or a library that raises the first one again
+    once it has caught it, must not break it off with a traceback."""
+    signal.signal(signal.SIGINT, lambda *_: None)
+    raise KeyboardInterrupt
+
+
 def main(argv=None) -> int:
     """Run the ``fretwork`` command ``argv`` (default: the process's arguments); its exit status."""
+    ours = threading.current_thread() is threading.main_thread() and \
+        signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if ours:
+        signal.signal(signal.SIGINT, _interrupt)
     try:
         return _main(argv)
     except KeyboardInterrupt:
         print("fretwork: interrupted", file=sys.stderr)
+        _forget_interrupt()
         return 130
+    finally:
+        if ours:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def _forget_interrupt() -> None:
+    """Let the process end with status 130 after a handled Ctrl-C.
+
+    A KeyboardInterrupt that went through code a C extension ran with PyRun_String (exudyn does)
+    sets CPython's "unhandled KeyboardInterrupt" flag even when the interrupt is then caught, and
+    the interpreter ends by killing itself with SIGINT instead of returning the status. Running
+    an empty string the same way clears that flag."""
+    import ctypes
+
+    ctypes.pythonapi.PyRun_SimpleStringFlags(b"", None)
 
 
 def _main(argv) -> int:

@@ -116,7 +116,7 @@ def test_3_a_folder_in_use_and_6_ctrl_c_during_a_limit_search_with_dask_workers(
     one_error(fretwork("run", CYLINDER, "--out", "limit", cwd=place),
               f"--out limit is in use by another fretwork command (pid {search.process.pid})")
     code, stderr = search.ctrl_c()
-    assert code == 130
+    assert code == 130, stderr
     assert stderr.rstrip().endswith("\nfretwork: interrupted") and stderr.count("fretwork:") == 1, stderr
     assert "Traceback" not in stderr and "leaked" not in stderr, stderr
     left = files(place / "limit") if (place / "limit").exists() else []
@@ -172,7 +172,7 @@ def test_10_unit_mistakes_are_said_before_any_work(place):
     run = Background("run", "unit_mistakes.toml", "--out", "o10", "--cache", "cache", cwd=place)
     run.wait_for("'coupling.wing_amplitude'")
     code, stderr = run.ctrl_c()
-    assert code == 130
+    assert code == 130, stderr
     lines = stderr.splitlines()
     assert lines[:2] == [
         "fretwork: warning: 'materials.steel.youngs_modulus' = 120 MPa is below 1,000 MPa for a metal: probably GPa "
