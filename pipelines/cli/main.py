@@ -63,13 +63,22 @@ def cmd_report(args) -> int:
     return 0
 
 
+def _widened(*fractions) -> str:
+    """The note that explains area fractions above 100 %: they refer to the contact area closed
+    after the preload, and wear can bring points beyond it into contact."""
+    if max((f for f in fractions if f is not None), default=0.0) <= 1.0:
+        return ""
+    return " (above 100 %: wear has widened the contact beyond the area closed after the preload)"
+
+
 def _human_summary(outcome) -> str:
     s = outcome.summary
     lines = [f"scene {s['scene']}: verdict {s['verdict'].upper()}"
              f"{'' if s['stationary'] else ' (not yet stationary)'} after {s['cycles_run']} cycles",
              f"  stick {s['stick_area_fraction']:.1%}, slip {s['slip_area_fraction']:.1%}, "
              f"damaged {s['damaged_area_fraction']:.1%} of the contact area after the preload"
-             + (" (wear has widened the contact)" if s['slip_area_fraction'] + s['stick_area_fraction'] > 1.0 else ""),
+             + _widened(s['slip_area_fraction'] + s['stick_area_fraction'], s['damaged_area_fraction'],
+                        s['cof_evolved_area_fraction']),
              f"  still sliding (the verdict's measure) {s.get('active_slip_area_fraction', s['slip_area_fraction']):.1%}, "
              f"COF evolved on {s['cof_evolved_area_fraction']:.1%}",
              f"  max wear depth {s['max_wear_depth_mm'] * 1000:.2f} µm, dissipated {s['dissipated_energy_mJ']:.4g} mJ"]
@@ -148,8 +157,9 @@ def cmd_limit(args) -> int:
         for run in summary["runs"]:
             print(f"  {run['amplitude_um']:8.1f} µm: {run['verdict'] or 'FAILED ' + str(run['error'])}"
                   + (f", clamp-force loss {100 * run['clamp_force_loss_fraction']:.2f} %, damaged area "
-                     f"{100 * (run['damaged_area_fraction'] or 0.0):.1f} %"
-                     if run.get("clamp_force_loss_fraction") is not None else ""))
+                     f"{100 * (run['damaged_area_fraction'] or 0.0):.1f} %{_widened(run['damaged_area_fraction'])}"
+                     if run.get("clamp_force_loss_fraction") is not None else "")
+                  + (f" ({run['note']})" if run.get("note") else ""))
         print(f"{name}: {describe_limit(result)} (tolerance {args.tolerance:g} µm)")
         if not result.monotone:
             for change in result.changes:
@@ -460,8 +470,8 @@ OUTPUTS = {
     "demo": ("operating", "limit", "sweep.h5", "margins.png", "summary.json"),
     "sweep": ("sweep.h5", "sweep.h5.part", "sweep_wing_amplitude.png", "campbell.png", "margins.png", "limit_runs"),
     "mbs": ("run.h5", "wing_time_history.png", "wing_spectrum.png", "wing_order_spectrum.png", "campbell.png"),
-    "study convergence": ("size_*mm", "convergence.png", "convergence.json", "limit_*"),
-    "validate": ("*.png",),
+    "study convergence": ("size_*mm", "convergence.png", "convergence.json"),
+    "validate": ("wear_gap_vs_geometry.png",),
     "reduce": ("reduction_error_vs_modes.png",),
 }
 
@@ -507,6 +517,9 @@ def _output(args):
 
     if args.command == "export-fmu":
         check_folder(Path(args.output).parent, "-o")
+        return nullcontext()
+    if args.command == "report":  # --out is the HTML file (default: in the results folder)
+        check_folder(Path(args.out).parent if args.out else args.results_dir, "--out")
         return nullcontext()
     out = getattr(args, "out", None)
     if out is None:

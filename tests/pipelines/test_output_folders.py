@@ -171,3 +171,21 @@ def test_margins_below_one_are_unsafe_and_those_within_the_tolerance_at_the_limi
     assert [result.state(k) for k in range(3)] == ["safe", "at the limit", "unsafe"]
     assert describe_margins(result) == ("UNSAFE at 900 rpm: the wing vibration exceeds the stick limit (margin below 1); "
                                         "at the limit at 750 rpm (within the limit's tolerance)")
+
+
+def test_a_run_that_ends_early_ends_its_progress_bar_full_with_the_reason(capsys):
+    from contact.verdict import Ending
+    from pipelines.jobs.run import ENDINGS, ProgressBar
+
+    bar = ProgressBar(100, True, "scene")
+    for _ in range(12):
+        bar.bar.update(1)
+    bar.close(ENDINGS[Ending.SHAKEDOWN], done=True)
+    assert (bar.bar.n, bar.bar.total) == (12, 12)
+    last = capsys.readouterr().err.replace("\r", "\n").splitlines()[-1]
+    assert "100%" in last and "12/12" in last and "stuck: shaken down, no more cycles needed" in last
+    stopped = ProgressBar(100, True, "scene")
+    stopped.bar.update(3)
+    stopped.close(ENDINGS[Ending.SLID_OFF])
+    last = capsys.readouterr().err.replace("\r", "\n").splitlines()[-1]
+    assert "3/100" in last and "stopped: the joint slides off" in last
