@@ -602,7 +602,7 @@ def _main(argv) -> int:
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(attach_negative_values(argv, _valued_options(parser)))
-    handler = getattr(args, "func", None) or getattr(args, "handler")
+    handler = getattr(args, "func", None) or args.handler
     from contact.solver import ConvergenceError
     from reduction.threads import pin_process
 

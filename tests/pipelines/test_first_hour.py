@@ -27,7 +27,7 @@ TINY_MBS = '[mbs]\nn_modes = 2\neffects = ["gear_mesh"]\n[mbs.solver]\nrevolutio
 
 def fretwork(*args, cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "pipelines.cli.main", *map(str, args)], cwd=cwd, env=ENV,
-                          capture_output=True, text=True, timeout=300)
+                          capture_output=True, text=True, timeout=300, check=False)
 
 
 def one_error(done: subprocess.CompletedProcess, *parts: str, code: int = 2) -> str:
@@ -131,7 +131,7 @@ def test_4_a_rerun_clears_the_outputs_of_the_earlier_run(place):
         (old / name).write_text("earlier")
     done = fretwork("mbs", "mbs.toml", "--out", "o4", "--json", cwd=place)
     assert done.returncode == 0, done.stderr
-    assert done.stderr == f"fretwork: note: removed 2 output(s) of an earlier run from o4: run.h5, wing_order_spectrum.png\n"
+    assert done.stderr == "fretwork: note: removed 2 output(s) of an earlier run from o4: run.h5, wing_order_spectrum.png\n"
     assert files(old) == ["campbell.png", "notes.txt", "run.h5", "wing_spectrum.png", "wing_time_history.png"]
 
 
@@ -175,9 +175,9 @@ def test_10_unit_mistakes_are_said_before_any_work(place):
     assert code == 130, stderr
     lines = stderr.splitlines()
     assert lines[:2] == [
-        "fretwork: warning: 'materials.steel.youngs_modulus' = 120 MPa is below 1,000 MPa for a metal: probably GPa "
-        "(MPa expected: 120 GPa is 120000 MPa)",
-        "fretwork: warning: 'coupling.wing_amplitude' = 100 mm is larger than 10 mm: probably µm "
-        "(mm expected: 100 µm is 0.1 mm)"]
+        ("fretwork: warning: 'materials.steel.youngs_modulus' = 120 MPa is below 1,000 MPa for a metal: probably GPa "
+         "(MPa expected: 120 GPa is 120000 MPa)"),
+        ("fretwork: warning: 'coupling.wing_amplitude' = 100 mm is larger than 10 mm: probably µm "
+         "(mm expected: 100 µm is 0.1 mm)")]
     assert lines[-1] == "fretwork: interrupted" and "Traceback" not in stderr
     assert not [name for name in files(place / "o10") if name.endswith((".part", ".tmp", ".lock"))]

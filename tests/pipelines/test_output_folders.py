@@ -35,9 +35,9 @@ def test_a_claim_creates_locks_and_releases_the_folder(tmp_path):
 
 def test_a_folder_in_use_is_refused_and_its_lock_kept(tmp_path):
     (tmp_path / LOCK_NAME).write_text(f"{os.getpid()}\n")  # this process: alive
-    with pytest.raises(InputError, match=r"--out .* is in use by another fretwork command \(pid \d+\)"):
-        with claim(tmp_path):
-            pass
+    with pytest.raises(InputError, match=r"--out .* is in use by another fretwork command \(pid \d+\)"), \
+            claim(tmp_path):
+        pass
     assert (tmp_path / LOCK_NAME).exists()
 
 
@@ -139,17 +139,17 @@ def test_plausibility_names_the_key_and_the_likely_unit():
             "coupling": {"wing_amplitude": 100.0}, "contact": {"critical_slip": 20.0},
             "bolts": {"m42": {"pretension": 44.0}}, "body_loads": [{"acceleration": [0.0, -9.81, 0.0]}]}
     assert plausibility(data) == [
-        "'materials.steel.youngs_modulus' = 210 MPa is below 1,000 MPa for a metal: probably GPa "
-        "(MPa expected: 210 GPa is 210000 MPa)",
-        "'materials.steel.density' = 7850 t/mm³ is far heavier than any solid: probably kg/m³ "
-        "(t/mm³ expected: 7850 kg/m³ is 7.85e-09 t/mm³)",
-        "'materials.ti64.density' = 4.43 t/mm³ is far heavier than any solid: probably g/cm³ "
-        "(t/mm³ expected: 4.43 g/cm³ is 4.43e-09 t/mm³)",
+        ("'materials.steel.youngs_modulus' = 210 MPa is below 1,000 MPa for a metal: probably GPa "
+         "(MPa expected: 210 GPa is 210000 MPa)"),
+        ("'materials.steel.density' = 7850 t/mm³ is far heavier than any solid: probably kg/m³ "
+         "(t/mm³ expected: 7850 kg/m³ is 7.85e-09 t/mm³)"),
+        ("'materials.ti64.density' = 4.43 t/mm³ is far heavier than any solid: probably g/cm³ "
+         "(t/mm³ expected: 4.43 g/cm³ is 4.43e-09 t/mm³)"),
         "'coupling.wing_amplitude' = 100 mm is larger than 10 mm: probably µm (mm expected: 100 µm is 0.1 mm)",
         "'contact.critical_slip' = 20 mm is larger than 1 mm: probably µm (mm expected: 20 µm is 0.02 mm)",
         "'bolts.m42.pretension' = 44 N is below 100 N: probably kN (N expected: 44 kN is 44000 N)",
-        "'body_loads[0].acceleration' has magnitude 9.81 mm/s²: probably m/s² "
-        "(mm/s² expected: 9.81 m/s² is 9810 mm/s²)"]
+        ("'body_loads[0].acceleration' has magnitude 9.81 mm/s²: probably m/s² "
+         "(mm/s² expected: 9.81 m/s² is 9810 mm/s²)")]
 
 
 @pytest.mark.parametrize("name", sorted(p.stem for p in EXAMPLES.glob("*.toml")))
