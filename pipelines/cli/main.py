@@ -575,10 +575,12 @@ def main(argv=None) -> int:
         signal.getsignal(signal.SIGINT) is signal.default_int_handler
     if ours:
         signal.signal(signal.SIGINT, _interrupt)
+    resumable = []
     try:
-        return _main(argv)
+        return _main(argv, resumable)
     except KeyboardInterrupt:
-        print("fretwork: interrupted", file=sys.stderr)
+        print("fretwork: interrupted" + "".join(f"; continue with --resume (from {path})" for path in resumable
+                                                 if path.is_file()), file=sys.stderr)
         _forget_interrupt()
         return 130
     finally:
@@ -598,10 +600,13 @@ def _forget_interrupt() -> None:
     ctypes.pythonapi.PyRun_SimpleStringFlags(b"", None)
 
 
-def _main(argv) -> int:
+def _main(argv, resumable: list) -> int:
+    """The command; ``resumable`` receives the checkpoint an interrupted run continues from."""
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(attach_negative_values(argv, _valued_options(parser)))
+    if args.command == "run":
+        resumable.append(Path(args.out) / "checkpoint.h5")
     handler = getattr(args, "func", None) or args.handler
     from contact.solver import ConvergenceError
     from reduction.threads import pin_process

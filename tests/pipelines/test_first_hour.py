@@ -181,3 +181,19 @@ def test_10_unit_mistakes_are_said_before_any_work(place):
          "(mm expected: 100 µm is 0.1 mm)")]
     assert lines[-1] == "fretwork: interrupted" and "Traceback" not in stderr
     assert not [name for name in files(place / "o10") if name.endswith((".part", ".tmp", ".lock"))]
+
+
+def test_6_ctrl_c_during_a_run_keeps_its_checkpoint_and_says_how_to_resume(place):
+    scene = (CYLINDER.read_text().replace("contact_size = 0.05", "contact_size = 0.2")
+             .replace("increments_per_cycle = 40", "increments_per_cycle = 8")
+             .replace("wear_cap = 2.0e-4", "wear_cap = 2.0e-4\ncheckpoint_every = 1"))
+    (place / "long.toml").write_text(scene)
+    run = Background("run", "long.toml", "--out", "o6", "--quiet", "--no-cache", cwd=place)
+    deadline = time.monotonic() + 120
+    while not (place / "o6" / "checkpoint.h5").exists():
+        assert run.process.poll() is None and time.monotonic() < deadline, run.stderr
+        time.sleep(0.05)
+    code, stderr = run.ctrl_c()
+    assert code == 130, stderr
+    assert stderr == "fretwork: interrupted; continue with --resume (from o6/checkpoint.h5)\n"
+    assert files(place / "o6") == ["checkpoint.h5"]
