@@ -262,6 +262,9 @@ def plausibility(data: dict) -> list[str]:
     if _number(amplitude) and amplitude > 10.0:
         found.append(f"'coupling.wing_amplitude' = {amplitude:g} mm is larger than 10 mm: probably µm "
                      f"(mm expected: {amplitude:g} µm is {1e-3 * amplitude:g} mm)")
+    elif _number(amplitude) and 0 < amplitude < 1e-3:
+        found.append(f"'coupling.wing_amplitude' = {amplitude:g} mm is below 1 µm: probably m "
+                     f"(mm expected: {amplitude:g} m is {1e3 * amplitude:g} mm)")
     slip = table("contact").get("critical_slip")
     if _number(slip) and slip > 1.0:
         found.append(f"'contact.critical_slip' = {slip:g} mm is larger than 1 mm: probably µm "
@@ -279,4 +282,10 @@ def plausibility(data: dict) -> list[str]:
             if 1.0 <= size <= 100.0:
                 found.append(f"'body_loads[{k}].acceleration' has magnitude {size:g} mm/s²: probably m/s² "
                              f"(mm/s² expected: {size:g} m/s² is {1e3 * size:g} mm/s²)")
+        spin = load.get("angular_velocity")
+        if isinstance(spin, list) and spin and all(_number(w) for w in spin):
+            size = sum(w * w for w in spin) ** 0.5
+            if size > 1000.0:
+                found.append(f"'body_loads[{k}].angular_velocity' has magnitude {size:g} rad/s: probably rpm "
+                             f"(rad/s expected: {size:g} rpm is {size * 3.141592653589793 / 30:.4g} rad/s)")
     return found

@@ -137,7 +137,7 @@ def test_plausibility_names_the_key_and_the_likely_unit():
                           "ti64": {"youngs_modulus": 120000.0, "density": 4.43},
                           "rubber": {"youngs_modulus": 5.0, "density": 1.1e-9}},
             "coupling": {"wing_amplitude": 100.0}, "contact": {"critical_slip": 20.0},
-            "bolts": {"m42": {"pretension": 44.0}}, "body_loads": [{"acceleration": [0.0, -9.81, 0.0]}]}
+            "bolts": {"m42": {"pretension": 44.0}}, "body_loads": [{"acceleration": [0.0, -9.81, 0.0]}, {"angular_velocity": [0.0, 0.0, 1500.0]}]}
     assert plausibility(data) == [
         ("'materials.steel.youngs_modulus' = 210 MPa is below 1,000 MPa for a metal: probably GPa "
          "(MPa expected: 210 GPa is 210000 MPa)"),
@@ -149,7 +149,11 @@ def test_plausibility_names_the_key_and_the_likely_unit():
         "'contact.critical_slip' = 20 mm is larger than 1 mm: probably µm (mm expected: 20 µm is 0.02 mm)",
         "'bolts.m42.pretension' = 44 N is below 100 N: probably kN (N expected: 44 kN is 44000 N)",
         ("'body_loads[0].acceleration' has magnitude 9.81 mm/s²: probably m/s² "
-         "(mm/s² expected: 9.81 m/s² is 9810 mm/s²)")]
+         "(mm/s² expected: 9.81 m/s² is 9810 mm/s²)"),
+        ("'body_loads[1].angular_velocity' has magnitude 1500 rad/s: probably rpm "
+         "(rad/s expected: 1500 rpm is 157.1 rad/s)")]
+    assert plausibility({"coupling": {"wing_amplitude": 1e-4}}) == [
+        "'coupling.wing_amplitude' = 0.0001 mm is below 1 µm: probably m (mm expected: 0.0001 m is 0.1 mm)"]
 
 
 @pytest.mark.parametrize("name", sorted(p.stem for p in EXAMPLES.glob("*.toml")))
