@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from pipelines.cli.main import attach_negative_values, main
-from pipelines.output.locks import LOCK_NAME, claim
+from pipelines.output.locks import LOCK_NAME, check_folder, claim
 from pipelines.scene.checks import plausibility
 from reduction.errors import InputError
 
@@ -193,3 +193,19 @@ def test_a_run_that_ends_early_ends_its_progress_bar_full_with_the_reason(capsys
     stopped.close(ENDINGS[Ending.SLID_OFF])
     last = capsys.readouterr().err.replace("\r", "\n").splitlines()[-1]
     assert "3/100" in last and "stopped: the joint slides off" in last
+
+
+def test_a_folder_without_write_permission_is_refused(tmp_path, monkeypatch):
+    monkeypatch.setattr(os, "access", lambda path, mode: Path(path) != tmp_path)  # root may write anywhere
+    with pytest.raises(InputError, match=rf"^--out {tmp_path}/out: {tmp_path} is not writable \(permission denied\)$"):
+        check_folder(tmp_path / "out")
+
+
+def test_the_sweep_still_takes_a_file_name_and_says_that_out_is_a_folder(tmp_path, capsys):
+    assert main(["sweep", str(CYLINDER), "--speeds", "700", "--out", str(tmp_path / "old" / "sweep.h5")]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        (f"fretwork: note: --out {tmp_path}/old/sweep.h5 names a file: written, with the plots beside it "
+         f"(--out is a folder for every command: --out {tmp_path}/old writes {tmp_path}/old/sweep.h5)"),
+        (f"fretwork: error: {CYLINDER} has no [mbs] table: it does not describe a multibody model "
+         "(an empty [mbs] table runs the default generic engine)")]
+    assert list(tmp_path.iterdir()) == []
