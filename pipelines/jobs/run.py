@@ -9,8 +9,8 @@ from pathlib import Path
 from tqdm import tqdm
 
 from contact import procedure
-from contact.sliding import SlidingSolver
 from contact.procedure import RunStopped
+from contact.sliding import SlidingSolver
 from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
 from contact.verdict import Ending

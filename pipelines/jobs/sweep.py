@@ -20,7 +20,6 @@ from mbs.sweep import SweepResult, collect_sweep, run_speed, write_sweep
 from pipelines.parallel import map_cases
 from reduction.errors import InputError
 
-
 SWEEP_FILE = "sweep.h5"
 
 
