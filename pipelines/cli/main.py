@@ -462,15 +462,18 @@ def attach_negative_values(argv: list[str], options: set[str]) -> list[str]:
     return out
 
 
-#: What each command writes into its --out folder, removed there before it runs again.
+#: What each command writes into its --out folder, removed there before it runs again (with the
+#: page `fretwork report` writes there by default: it would describe the earlier run).
 OUTPUTS = {
     "run": ("results.h5", "results.h5.part", "checkpoint.h5", "checkpoint.h5.tmp", "plots", "interface.xdmf",
-            "interface.h5", "interface_final.vtu"),
-    "limit": ("limit.png", "limit.json", "runs"),
-    "demo": ("operating", "limit", "sweep.h5", "margins.png", "summary.json"),
-    "sweep": ("sweep.h5", "sweep.h5.part", "sweep_wing_amplitude.png", "campbell.png", "margins.png", "limit_runs"),
-    "mbs": ("run.h5", "wing_time_history.png", "wing_spectrum.png", "wing_order_spectrum.png", "campbell.png"),
-    "study convergence": ("size_*mm", "convergence.png", "convergence.json"),
+            "interface.h5", "interface_final.vtu", "report.html"),
+    "limit": ("limit.png", "limit.json", "runs", "report.html"),
+    "demo": ("operating", "limit", "sweep.h5", "margins.png", "summary.json", "report.html"),
+    "sweep": ("sweep.h5", "sweep.h5.part", "sweep_wing_amplitude.png", "campbell.png", "margins.png", "limit_runs",
+              "report.html"),
+    "mbs": ("run.h5", "wing_time_history.png", "wing_spectrum.png", "wing_order_spectrum.png", "campbell.png",
+            "report.html"),
+    "study convergence": ("size_*mm", "convergence.png", "convergence.json", "report.html"),
     "validate": ("wear_gap_vs_geometry.png",),
     "reduce": ("reduction_error_vs_modes.png",),
 }
