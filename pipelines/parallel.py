@@ -30,7 +30,9 @@ from __future__ import annotations
 
 import logging
 import re
+import signal
 import sys
+import threading
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -171,11 +173,32 @@ def _local_cluster(workers: int | None, retries: int, n_cases: int | None = None
     # solver's cases about 20 % slower (its large temporaries are mapped and unmapped anew).
     settings = {"distributed.scheduler.allowed-failures": retries,
                 "distributed.nanny.pre-spawn-environ": dict(SINGLE_THREAD_ENV)}
-    with dask.config.set(settings), \
-            LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                         scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.ERROR,
-                         memory_limit=0) as local:
-        yield local
+    with dask.config.set(settings):  # for the cluster's whole life: a worker that died is started anew
+        with _workers_ignore_ctrl_c():
+            local = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                                 scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.ERROR,
+                                 memory_limit=0)
+        with local:
+            yield local
+
+
+@contextmanager
+def _workers_ignore_ctrl_c() -> Iterator[None]:
+    """Processes started in the block ignore SIGINT.
+
+    Ctrl-C reaches every process of the terminal's process group: a worker that took it would
+    die in the middle of its case, with a traceback and leaked semaphores. The workers inherit
+    the ignored signal (it survives their exec); the client alone is interrupted and closes the
+    cluster, which ends the workers. A Ctrl-C while the cluster starts (the block) is ignored, and
+    a worker started anew after its process died does not ignore it."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextmanager

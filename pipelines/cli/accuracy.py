@@ -9,8 +9,6 @@ from pathlib import Path
 
 from pipelines.parallel import add_cluster_arguments
 from reduction.errors import InputError
-from pipelines.studies.accuracy_report import plot_pareto, table_lines
-from pipelines.studies.accuracy import accuracy_study
 
 
 def _parse_value(text: str, where: str):
@@ -32,6 +30,9 @@ def _parse_pairs(items: list[str], option: str) -> dict:
 
 def cmd_accuracy(args) -> int:
     """``fretwork study accuracy``: run the study, print the table (or JSON), write plot and JSON."""
+    from pipelines.studies.accuracy import accuracy_study  # the study's modules load only when it runs
+    from pipelines.studies.accuracy_report import plot_pareto, table_lines
+
     overrides = {key: _parse_value(value, f"--set {key}") for key, value in _parse_pairs(args.set, "--set").items()}
     sweeps = {key: [_parse_value(v, f"--knob {key}") for v in value.split(",")]
               for key, value in _parse_pairs(args.knob, "--knob").items()}

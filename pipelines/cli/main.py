@@ -1,11 +1,23 @@
-"""The ``fretwork`` command line. Bad input: one clear message on stderr, exit status 2."""
+"""The ``fretwork`` command line.
+
+Every message on stderr is one line starting ``fretwork: error:`` (bad input, exit status 2; a
+simulation that stopped, exit 1), ``fretwork: warning:`` (a likely unit mistake in the scene),
+``fretwork: note:`` or ``fretwork: interrupted`` (Ctrl-C, exit 130); never a traceback. Every
+command that writes files checks and locks its ``--out`` folder before any work
+(:func:`pipelines.output.locks.claim`).
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
 import math
+import os
+import re
+import signal
 import sys
+import threading
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -51,13 +63,22 @@ def cmd_report(args) -> int:
     return 0
 
 
+def _widened(*fractions) -> str:
+    """The note that explains area fractions above 100 %: they refer to the contact area closed
+    after the preload, and wear can bring points beyond it into contact."""
+    if max((f for f in fractions if f is not None), default=0.0) <= 1.0:
+        return ""
+    return " (above 100 %: wear has widened the contact beyond the area closed after the preload)"
+
+
 def _human_summary(outcome) -> str:
     s = outcome.summary
     lines = [f"scene {s['scene']}: verdict {s['verdict'].upper()}"
              f"{'' if s['stationary'] else ' (not yet stationary)'} after {s['cycles_run']} cycles",
              f"  stick {s['stick_area_fraction']:.1%}, slip {s['slip_area_fraction']:.1%}, "
              f"damaged {s['damaged_area_fraction']:.1%} of the contact area after the preload"
-             + (" (wear has widened the contact)" if s['slip_area_fraction'] + s['stick_area_fraction'] > 1.0 else ""),
+             + _widened(s['slip_area_fraction'] + s['stick_area_fraction'], s['damaged_area_fraction'],
+                        s['cof_evolved_area_fraction']),
              f"  still sliding (the verdict's measure) {s.get('active_slip_area_fraction', s['slip_area_fraction']):.1%}, "
              f"COF evolved on {s['cof_evolved_area_fraction']:.1%}",
              f"  max wear depth {s['max_wear_depth_mm'] * 1000:.2f} µm, dissipated {s['dissipated_energy_mJ']:.4g} mJ"]
@@ -136,8 +157,9 @@ def cmd_limit(args) -> int:
         for run in summary["runs"]:
             print(f"  {run['amplitude_um']:8.1f} µm: {run['verdict'] or 'FAILED ' + str(run['error'])}"
                   + (f", clamp-force loss {100 * run['clamp_force_loss_fraction']:.2f} %, damaged area "
-                     f"{100 * (run['damaged_area_fraction'] or 0.0):.1f} %"
-                     if run.get("clamp_force_loss_fraction") is not None else ""))
+                     f"{100 * (run['damaged_area_fraction'] or 0.0):.1f} %{_widened(run['damaged_area_fraction'])}"
+                     if run.get("clamp_force_loss_fraction") is not None else "")
+                  + (f" ({run['note']})" if run.get("note") else ""))
         print(f"{name}: {describe_limit(result)} (tolerance {args.tolerance:g} µm)")
         if not result.monotone:
             for change in result.changes:
@@ -151,30 +173,32 @@ def cmd_sweep(args) -> int:
     """`fretwork sweep`: the multibody speed sweep; with --margins also the amplitude limit and the margins."""
     if not args.margins:
         return args.multibody_handler(args)
-    from pipelines.jobs.sweep import parse_speeds
+    from pipelines.jobs.sweep import parse_speeds, sweep_paths
     from pipelines.jobs.limit import parse_range_um
-    from pipelines.jobs.margins import margin_sweep, plot_margins
+    from pipelines.jobs.margins import describe_margins, margin_sweep, plot_margins
     from pipelines import scene as scenes
 
     speeds = parse_speeds(args.speeds)
     low, high = parse_range_um(args.amplitude)
     name = scenes.load(args.scene).name
-    out = Path(args.out)
+    folder, out = sweep_paths(args.out)
     result, _ = margin_sweep(args.scene, speeds, amplitude_range_mm=(low, high), tolerance_mm=1e-3 * args.tolerance,
-                             cache_dir=_cache(args), sweep_path=out, out_dir=out.parent / "limit_runs",
-                             scheduler=args.scheduler, workers=args.workers, progress=True)
-    plot = plot_margins(result, (Path(args.plots) if args.plots else out.parent) / "margins.png",
+                             cache_dir=_cache(args), sweep_path=out, out_dir=folder / "limit_runs",
+                             scheduler=args.scheduler, workers=args.workers, progress=not getattr(args, "quiet", False))
+    plot = plot_margins(result, (Path(args.plots) if args.plots else folder) / "margins.png",
                         f"{name}: fretting safety margin")
     summary = dict(result.to_json(), file=str(out), plot=str(plot))
     if args.json:
         print(_json(summary))
     else:
         print(f"{'rpm':>8} {'wing µm':>9} {'margin':>8}")
-        for speed, amplitude, margin in zip(result.speeds_rpm, result.wing_amplitude_mm, result.margin):
-            print(f"{speed:8.1f} {1e3 * amplitude:9.1f} {margin:8.2f}" + ("  < 1: NOT SAFE" if margin < 1 else ""))
-        limit = "below the searched range" if summary["limit_um"] is None else f"{summary['limit_um']:.1f} µm"
+        flags = {"unsafe": "  < 1: UNSAFE", "at the limit": "  at the limit (within the tolerance)", "safe": ""}
+        for k, (speed, amplitude, margin) in enumerate(zip(result.speeds_rpm, result.wing_amplitude_mm, result.margin)):
+            print(f"{speed:8.1f} {1e3 * amplitude:9.1f} {margin:8.2f}{flags[result.state(k)]}")
+        limit = "above the searched range" if summary["limit_um"] is None else f"{summary['limit_um']:.1f} µm"
         print(f"amplitude limit {limit} (searched at {result.limit_speed_rpm:.0f} rpm); "
               f"calibration factor {result.calibration:.4g}")
+        print(describe_margins(result))
         print(f"results: {out}, plot: {plot}")
     return 0
 
@@ -196,10 +220,17 @@ def cmd_reduce(args) -> int:
     return 0
 
 
+def _point(text: str) -> list[float]:
+    try:
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise InputError(f"--probe {text!r}: give the point as x,y[,z] in mm, e.g. --probe -65,0,0") from None
+
+
 def cmd_study(args) -> int:
     from pipelines.studies.constant_cof import constant_cof_comparison
 
-    probes = {f"P{k + 1}": [float(v) for v in p.split(",")] for k, p in enumerate(args.probe)}
+    probes = {f"P{k + 1}": _point(p) for k, p in enumerate(args.probe)}
     records = constant_cof_comparison(args.scene, probes)
     if args.json:
         print(_json(records))
@@ -261,9 +292,28 @@ def cmd_convergence(args) -> int:
     return 0
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse with fretwork's one message format: a usage error is one line, exit status 2."""
+
+    def error(self, message):
+        command = self.prog.removeprefix("fretwork").strip()
+        print(f"fretwork: error: {message} (see fretwork {command + ' ' if command else ''}--help)", file=sys.stderr)
+        raise SystemExit(2)
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("fretwork")
+    except PackageNotFoundError:  # run from a source tree that is not installed
+        return "unknown (not installed)"
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``fretwork`` parser: one sub-command per job."""
-    parser = argparse.ArgumentParser(prog="fretwork", description=__doc__)
+    parser = Parser(prog="fretwork", description="Fretting safety of bolted joints under vibration.")
+    parser.add_argument("--version", action="version", version=f"fretwork {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
     _add_run_parser(sub)
     _add_validate_and_demo_parsers(sub)
@@ -283,6 +333,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--amplitude", default="50:500", metavar="LOW:HIGH",
                        help="with --margins: wing amplitude range of the limit search, µm (default %(default)s)")
     sweep.add_argument("--tolerance", type=float, default=10.0, help="with --margins: limit tolerance, µm")
+    sweep.add_argument("--quiet", action="store_true", help="with --margins: no progress bars")
     _add_cache_arguments(sweep)
     sweep.set_defaults(multibody_handler=sweep.get_default("handler"), handler=cmd_sweep)
     add_run_parser(sub)
@@ -378,29 +429,214 @@ def _add_study_parsers(sub) -> None:
     convergence.set_defaults(func=cmd_convergence)
 
 
+_NEGATIVE = re.compile(r"^-\.?\d")
+
+
+def _valued_options(parser: argparse.ArgumentParser) -> set[str]:
+    """The long options (of every sub-command) that take a value."""
+    found = set()
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                found |= _valued_options(sub)
+        elif action.nargs != 0:
+            found.update(o for o in action.option_strings if o.startswith("--"))
+    return found
+
+
+def attach_negative_values(argv: list[str], options: set[str]) -> list[str]:
+    """``--probe -65,0,0`` → ``--probe=-65,0,0``: argparse takes a value that starts with '-' and
+    is not a plain number for an option, so negative coordinates and ranges are attached here."""
+    out, tokens = [], iter(argv)
+    for token in tokens:
+        if token in options:
+            value = next(tokens, None)
+            if value is not None and _NEGATIVE.match(value):
+                out.append(f"{token}={value}")
+                continue
+            out.append(token)
+            if value is not None:
+                out.append(value)
+            continue
+        out.append(token)
+    return out
+
+
+#: What each command writes into its --out folder, removed there before it runs again (with the
+#: page `fretwork report` writes there by default: it would describe the earlier run).
+OUTPUTS = {
+    "run": ("results.h5", "results.h5.part", "checkpoint.h5", "checkpoint.h5.tmp", "plots", "interface.xdmf",
+            "interface.h5", "interface_final.vtu", "report.html"),
+    "limit": ("limit.png", "limit.json", "runs", "report.html"),
+    "demo": ("operating", "limit", "sweep.h5", "margins.png", "summary.json", "report.html"),
+    "sweep": ("sweep.h5", "sweep.h5.part", "sweep_wing_amplitude.png", "campbell.png", "margins.png", "limit_runs",
+              "report.html"),
+    "mbs": ("run.h5", "wing_time_history.png", "wing_spectrum.png", "wing_order_spectrum.png", "campbell.png",
+            "report.html"),
+    "study convergence": ("size_*mm", "convergence.png", "convergence.json", "report.html"),
+    "validate": ("wear_gap_vs_geometry.png",),
+    "reduce": ("reduction_error_vs_modes.png",),
+}
+
+
+def _command(args) -> str:
+    return f"study {args.study}" if args.command == "study" else args.command
+
+
+def _warn(message: str) -> None:
+    print(f"fretwork: warning: {message}", file=sys.stderr)
+
+
+def _check_input(args) -> None:
+    """The command's scene and range options, checked before its output folder is touched;
+    the scene's plausibility warnings (likely unit mistakes) are said here, once."""
+    from pipelines import scene as scenes
+    from pipelines.scene.checks import plausibility
+
+    if isinstance(getattr(args, "amplitude", None), str):
+        from pipelines.jobs.limit import parse_range_um
+        parse_range_um(args.amplitude)
+    if isinstance(getattr(args, "speeds", None), str):
+        from pipelines.jobs.sweep import parse_speeds
+        parse_speeds(args.speeds)
+    if isinstance(getattr(args, "sizes", None), str):
+        _sizes(args.sizes)
+    path = getattr(args, "scene", None)
+    if path is None:
+        return
+    if args.command in ("mbs", "sweep"):
+        from pipelines.cli.mbs import model_params
+        model_params(path)  # the whole scene is valid and has an [mbs] table
+        data = scenes.tables(path)
+    else:
+        data = scenes.load(path).data
+    for message in plausibility(data):
+        _warn(message)
+
+
+def _output(args):
+    """The claim on the command's output folder (nullcontext for a command that writes none)."""
+    from pipelines.output.locks import PARTIAL, check_folder, claim
+
+    if args.command == "export-fmu":
+        check_folder(Path(args.output).parent, "-o")
+        return nullcontext()
+    if args.command == "report":  # --out is the HTML file (default: in the results folder)
+        check_folder(Path(args.out).parent if args.out else args.results_dir, "--out")
+        return nullcontext()
+    out = getattr(args, "out", None)
+    if out is None:
+        _check_input(args)
+        return nullcontext()
+    outputs = () if getattr(args, "resume", False) else OUTPUTS.get(_command(args), ())
+    if args.command == "sweep":
+        from pipelines.jobs.sweep import sweep_paths
+
+        folder, path = sweep_paths(out)
+        if path.parent == folder and folder != Path(out):
+            print(f"fretwork: note: --out {out} names a file: written, with the plots beside it "
+                  f"(--out is a folder for every command: --out {folder} writes {folder / 'sweep.h5'})",
+                  file=sys.stderr)
+            outputs = ()  # the folder holds more than this sweep: nothing else is removed
+        out = folder
+    # only `run` resumes: elsewhere a checkpoint of an interrupted run is a half-written output
+    partial = PARTIAL if args.command == "run" else (*PARTIAL, "**/checkpoint.h5")
+    return claim(out, outputs=outputs, ready=lambda: _check_input(args), partial=partial)
+
+
+def _unexpected(error: BaseException) -> str:
+    if isinstance(error, UnicodeDecodeError):
+        return f"a file is not UTF-8 text ({error.reason} at byte {error.start})"
+    if isinstance(error, OSError):
+        where = f"{error.filename}: " if error.filename else ""
+        return f"{where}{error.strerror or error}"
+    return f"internal error ({type(error).__name__}: {error}); set FRETWORK_TRACEBACK=1 to see where"
+
+
+def _stopped_hint(args, error) -> str:
+    from pipelines.jobs.run import EARLY_ENDINGS
+
+    ending = getattr(error, "ending", None)
+    if ending in EARLY_ENDINGS:
+        return f"; the results file holds the cycles run so far, marked '{ending.value}'"
+    out = getattr(args, "out", None)
+    return (f"; partial results stay in {out}: after changing the scene, run again "
+            "(or --resume from its last checkpoint)") if out else ""
+
+
+def _interrupt(signum, frame):
+    """Ctrl-C: interrupt the command once. Its clean-up (closing a cluster, removing half-written
+    files) then runs to the end: a second Ctrl-C, or a library that raises the first one again
+    once it has caught it, must not break it off with a traceback."""
+    signal.signal(signal.SIGINT, lambda *_: None)
+    raise KeyboardInterrupt
+
+
 def main(argv=None) -> int:
+    """Run the ``fretwork`` command ``argv`` (default: the process's arguments); its exit status."""
+    ours = threading.current_thread() is threading.main_thread() and \
+        signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if ours:
+        signal.signal(signal.SIGINT, _interrupt)
+    resumable = []
+    try:
+        return _main(argv, resumable)
+    except KeyboardInterrupt:
+        print("fretwork: interrupted" + "".join(f"; continue with --resume (from {path})" for path in resumable
+                                                 if path.is_file()), file=sys.stderr)
+        _forget_interrupt()
+        return 130
+    finally:
+        if ours:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def _forget_interrupt() -> None:
+    """Let the process end with status 130 after a handled Ctrl-C.
+
+    A KeyboardInterrupt that went through code a C extension ran with PyRun_String (exudyn does)
+    sets CPython's "unhandled KeyboardInterrupt" flag even when the interrupt is then caught, and
+    the interpreter ends by killing itself with SIGINT instead of returning the status. Running
+    an empty string the same way clears that flag."""
+    import ctypes
+
+    ctypes.pythonapi.PyRun_SimpleStringFlags(b"", None)
+
+
+def _main(argv, resumable: list) -> int:
+    """The command; ``resumable`` receives the checkpoint an interrupted run continues from."""
     parser = build_parser()
-    args = parser.parse_args(argv)
-    handler = getattr(args, "func", None) or getattr(args, "handler")
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = parser.parse_args(attach_negative_values(argv, _valued_options(parser)))
+    if args.command == "run":
+        resumable.append(Path(args.out) / "checkpoint.h5")
+    handler = getattr(args, "func", None) or args.handler
     from contact.solver import ConvergenceError
     from reduction.threads import pin_process
 
     pin_process()  # the same scene gives the same bits whatever the thread settings
+    # Progress bars are drawn by this process alone: a thread lock, not tqdm's default
+    # multiprocessing lock, whose semaphore a Ctrl-C could leave behind (a "leaked semaphore" warning).
+    from tqdm import tqdm
+    tqdm.set_lock(threading.RLock())
 
     try:
-        return handler(args)
+        with _output(args):
+            return handler(args)
     except InputError as error:
         print(f"fretwork: error: {error}", file=sys.stderr)
         return 2
     except ConvergenceError as error:
-        out = getattr(args, "out", None)
-        hint = (f"\n  partial results stay in {out}; after changing the scene, run again "
-                "(or --resume from its last checkpoint)") if out else ""
-        print(f"fretwork: the simulation stopped: {error}{hint}", file=sys.stderr)
+        print(f"fretwork: error: the simulation stopped: {error}{_stopped_hint(args, error)}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print("fretwork: interrupted", file=sys.stderr)
-        return 130
+    except (OSError, UnicodeDecodeError) as error:  # a file that cannot be read or written
+        print(f"fretwork: error: {_unexpected(error)}", file=sys.stderr)
+        return 2
+    except Exception as error:
+        if os.environ.get("FRETWORK_TRACEBACK"):
+            raise
+        print(f"fretwork: error: {_unexpected(error)}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -22,29 +22,27 @@ from mbs.model import SimulationError
 from mbs.parameters import ModelParams
 from mbs.plots import plot_campbell, plot_sweep
 from mbs.run import run_model
-from pipelines.jobs.sweep import parse_speeds, speed_sweep
+from pipelines.jobs.sweep import parse_speeds, speed_sweep, sweep_paths
 from pipelines.parallel import add_cluster_arguments
 from reduction.errors import InputError
 
 
 def model_params(path) -> ModelParams:
     """The multibody model of a scene file: a coupled scene's [mbs] table with the multibody
-    effects of its 'scene.effects', else the [mbs] table alone; a scene without [mbs] is refused."""
+    effects of its 'scene.effects', else the [mbs] table alone; a scene without [mbs] is refused,
+    and a file with more than [mbs] must be a valid scene as a whole."""
     from mbs.scene import load_model_params
     from pipelines import scene as scenes
     from pipelines.coupling import multibody_params
 
-    try:
-        is_coupled = "coupling" in tomllib.loads(Path(path).read_text())
-    except (OSError, tomllib.TOMLDecodeError):
-        is_coupled = False  # load_model_params says what is wrong with the file
-    if not is_coupled:
-        return load_model_params(path)
-    scene = scenes.load(path)
-    if "mbs" not in scene.data:
+    tables = scenes.tables(path)
+    if not isinstance(tables.get("mbs"), dict):
         raise InputError(f"{path} has no [mbs] table: it does not describe a multibody model "
                          "(an empty [mbs] table runs the default generic engine)")
-    return multibody_params(scene)
+    if set(tables) == {"mbs"}:
+        return load_model_params(path)
+    scene = scenes.load(path)
+    return multibody_params(scene) if "coupling" in scene.data else load_model_params(path)
 
 
 def _counterweight(args, params: ModelParams) -> int:
@@ -72,7 +70,8 @@ def add_sweep_parser(subparsers):
                     "dominant frequencies and order/mode crossings; write one HDF5 file.")
     parser.add_argument("scene", help="scene TOML file (its [mbs] table sets the model)")
     parser.add_argument("--speeds", required=True, help="START:STOP:STEP or a comma list, rpm (e.g. 500:800:10)")
-    parser.add_argument("--out", default="results/sweep.h5", help="HDF5 file for the sweep (default: %(default)s)")
+    parser.add_argument("--out", default="results/sweep",
+                        help="output folder: sweep.h5 and the plots (default: %(default)s; a name ending .h5 is the file)")
     parser.add_argument("--plots", default=None, help="folder for sweep and Campbell PNG plots (default: beside --out)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
     add_cluster_arguments(parser)
@@ -96,25 +95,26 @@ def _table(result) -> str:
 
 def run_sweep(args) -> int:
     """Run the sweep described by parsed args; 0 if at least one speed converged, 1 if none, 2 on bad input."""
+    folder, path = sweep_paths(args.out)
     try:
         params = model_params(args.scene)
         speeds = parse_speeds(args.speeds)
-        result = speed_sweep(params, speeds, path=args.out, progress=True, scheduler=args.scheduler,
+        result = speed_sweep(params, speeds, path=path, progress=True, scheduler=args.scheduler,
                              workers=args.workers)
     except InputError as error:
-        print(f"fretwork sweep: {error}", file=sys.stderr)
+        print(f"fretwork: error: {error}", file=sys.stderr)
         return 2
-    plots = Path(args.plots) if args.plots else Path(args.out).parent
+    plots = Path(args.plots) if args.plots else folder
     crossing_speeds = [c["speed_rpm"] for c in result.crossings]
     plot_sweep(result.speeds_rpm, result.wing_amplitude, plots / "sweep_wing_amplitude.png", crossings_rpm=crossing_speeds)
     plot_campbell(result.campbell, plots / "campbell.png")
     if args.json:
         summary = result.to_json()
-        summary["file"] = str(args.out)
+        summary["file"] = str(path)
         print(json.dumps(summary, indent=2))
     else:
         print(_table(result))
-        print(f"results: {args.out}")
+        print(f"results: {path}")
     return 0 if np.isfinite(result.wing_amplitude).any() else 1
 
 
@@ -142,12 +142,12 @@ def run_single(args) -> int:
         params = model_params(args.scene)
         counterweight = _counterweight(args, params)
     except InputError as error:
-        print(f"fretwork mbs: {error}", file=sys.stderr)
+        print(f"fretwork: error: {error}", file=sys.stderr)
         return 2
     try:
         outputs = run_model(params, args.out)
     except SimulationError as error:
-        print(f"fretwork mbs: {error}", file=sys.stderr)
+        print(f"fretwork: error: the simulation stopped: {error}", file=sys.stderr)
         return 1
     histories = outputs.histories
     interface = None

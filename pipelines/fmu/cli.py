@@ -47,10 +47,10 @@ def run_export_fmu(args: argparse.Namespace) -> int:
         try:
             path = export_fmu(args.results, args.output, signals, args.fmi, model_name=args.model_name)
         except InputError as error:
-            print(f"error: {error}", file=sys.stderr)
+            print(f"fretwork: error: {error}", file=sys.stderr)
             return 2
     for warning in caught:
-        print(f"warning: {warning.message}", file=sys.stderr)
+        print(f"fretwork: warning: {warning.message}", file=sys.stderr)
     content = "sources only, no binary" if caught else "binary and sources"
     print(f"wrote {path} (FMI {args.fmi}.0 co-simulation, {content}, {path.stat().st_size / 1e6:.2f} MB)")
     return 0

@@ -47,7 +47,7 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
     from pipelines import scene as scenes
     from pipelines.coupling import multibody_params
     from pipelines.jobs.limit import find_limit, plot_limit, write_limit
-    from pipelines.jobs.margins import margins_of, plot_margins, write_margins
+    from pipelines.jobs.margins import describe_margins, margins_of, plot_margins, write_margins
     from pipelines.jobs.run import run_scene
     from pipelines.stages import StageCache
 
@@ -90,7 +90,11 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
         "clamp_force_loss_fraction": s.get("clamp_force_loss_fraction"),
         "amplitude_limit_um": None if limit.limit_mm is None else 1e3 * limit.limit_mm,
         "margin_at_operating_point": operating_margin,
-        **{k: v for k, v in margins.to_json().items() if k in ("smallest_margin", "smallest_margin_speed_rpm")},
+        "operating_point": ("unsafe" if operating_margin < 1 else "at the limit" if limit.limit_mm is not None
+                            and abs(limit.limit_mm - s["wing_amplitude_mm"]) <= limit.tolerance_mm else "safe"),
+        **{k: v for k, v in margins.to_json().items()
+           if k in ("smallest_margin", "smallest_margin_speed_rpm", "unsafe_speeds", "at_limit_speeds")},
+        "margins": describe_margins(margins),
         "wall_time_s": sum(times.values()),
     }
     files = {"results": str(outcome.results_path), "plots": str(out_dir / "operating" / "plots"),
@@ -115,8 +119,9 @@ def describe(result: DemoResult) -> str:
         lines.append("  amplitude limit: above the searched range (stuck throughout; margins are lower bounds)")
     else:
         lines.append(f"  amplitude limit {s['amplitude_limit_um']:.0f} µm: margin {s['margin_at_operating_point']:.2f} "
-                     f"at the operating point, smallest {s['smallest_margin']:.2f} at "
-                     f"{s['smallest_margin_speed_rpm']:.0f} rpm")
+                     f"at the operating point ({s['operating_point'].upper() if s['operating_point'] != 'safe' else 'safe'}), "
+                     f"smallest {s['smallest_margin']:.2f} at {s['smallest_margin_speed_rpm']:.0f} rpm")
+    lines.append(f"  margins: {s['margins']}")
     lines.append("  time: " + ", ".join(f"{k.removesuffix('_s').replace('_', ' ')} {v:.1f} s" for k, v in t.items())
                  + f" (total {s['wall_time_s']:.0f} s)")
     for name, path in result.files.items():

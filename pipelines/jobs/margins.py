@@ -3,7 +3,8 @@
 For each engine speed the multibody model gives the wing amplitude (half the peak-to-peak wing
 torsion of the scene's counterweight); the margin is amplitude limit / wing amplitude, where
 the limit comes from :func:`pipelines.jobs.limit.find_limit` on the coupled scene. A margin below
-1 means the joint does not stay stuck at that speed.
+1 means the joint does not stay stuck at that speed: it is flagged unsafe (``unsafe_speeds``, red
+in the plot); an amplitude within the limit's tolerance of the limit is "at the limit".
 
 Calibration: when the scene states its wing amplitude (``coupling.wing_amplitude``, e.g. a
 measured one at the scene's engine speed), every sweep amplitude is scaled by the same factor
@@ -40,8 +41,27 @@ class MarginResult:
     margin: np.ndarray
     limit_speed_rpm: float
 
+    @property
+    def unsafe(self) -> np.ndarray:
+        """Speeds whose margin is below 1: the wing vibration exceeds the stick limit (bool, (n,))."""
+        return np.isfinite(self.margin) & (self.margin < 1.0)
+
+    @property
+    def at_limit(self) -> np.ndarray:
+        """Speeds whose wing amplitude lies within the limit's tolerance of the limit: the verdict
+        there is as uncertain as the limit itself (bool, (n,))."""
+        if self.limit.limit_mm is None:
+            return np.zeros(len(self.margin), dtype=bool)
+        return np.abs(self.wing_amplitude_mm - self.limit.limit_mm) <= self.limit.tolerance_mm
+
+    def state(self, k: int) -> str:
+        """'unsafe', 'at the limit' or 'safe' at the k-th speed."""
+        return "unsafe" if self.unsafe[k] else "at the limit" if self.at_limit[k] else "safe"
+
     def to_json(self) -> dict:
         return {
+            "unsafe_speeds": self.speeds_rpm[self.unsafe].tolist(),
+            "at_limit_speeds": self.speeds_rpm[self.at_limit].tolist(),
             "speeds_rpm": self.speeds_rpm.tolist(),
             "wing_amplitude_um": (1e3 * self.wing_amplitude_mm).tolist(),
             "calibration_factor": self.calibration,
@@ -52,6 +72,21 @@ class MarginResult:
             "smallest_margin_speed_rpm": None if not np.isfinite(self.margin).any()
             else float(self.speeds_rpm[int(np.nanargmin(self.margin))]),
         }
+
+
+def _rpm(speeds) -> str:
+    return ", ".join(f"{v:.0f}" for v in speeds) + " rpm"
+
+
+def describe_margins(result: MarginResult) -> str:
+    """One line: the unsafe speeds (margin below 1) and those at the limit, or that all are safe."""
+    unsafe, at_limit = result.speeds_rpm[result.unsafe], result.speeds_rpm[result.at_limit & ~result.unsafe]
+    parts = []
+    if unsafe.size:
+        parts.append(f"UNSAFE at {_rpm(unsafe)}: the wing vibration exceeds the stick limit (margin below 1)")
+    if at_limit.size:
+        parts.append(f"at the limit at {_rpm(at_limit)} (within the limit's tolerance)")
+    return "; ".join(parts) if parts else "safe at every speed (every margin at least 1)"
 
 
 def calibration_factor(scene, cache) -> float:
@@ -113,7 +148,8 @@ def write_margins(path, result: MarginResult) -> None:
         group.attrs["limit_speed_rpm"] = result.limit_speed_rpm
         for name, data, units in (("speed_rpm", result.speeds_rpm, "rpm"),
                                   ("wing_amplitude", result.wing_amplitude_mm, "mm"),
-                                  ("margin", result.margin, "1")):
+                                  ("margin", result.margin, "1"),
+                                  ("unsafe", result.unsafe, "1 if the margin is below 1")):
             group.create_dataset(name, data=data).attrs["units"] = units
         group.attrs["limit_mm"] = np.nan if result.limit.limit_mm is None else result.limit.limit_mm
 
@@ -126,15 +162,24 @@ def plot_margins(result: MarginResult, path: Path, title: str) -> Path:
     import matplotlib.pyplot as plt
 
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-    top.plot(result.speeds_rpm, 1e3 * result.wing_amplitude_mm, "o-", label="wing amplitude")
+    top.plot(result.speeds_rpm, 1e3 * result.wing_amplitude_mm, "-", color="0.6", label="wing amplitude")
     if result.limit.limit_mm is not None:
         top.axhline(1e3 * result.limit.limit_mm, color="tab:red", linestyle="--",
                     label=f"stick limit {1e3 * result.limit.limit_mm:.0f} µm")
     top.set_ylabel("wing amplitude (µm)")
     top.legend()
     top.grid(True, alpha=0.3)
-    bottom.plot(result.speeds_rpm, result.margin, "o-", color="tab:green")
+    bottom.plot(result.speeds_rpm, result.margin, "-", color="0.6", zorder=1)
+    colours = {"safe": "tab:green", "at the limit": "tab:orange", "unsafe": "tab:red"}
+    states = np.array([result.state(k) for k in range(len(result.speeds_rpm))])
+    for state, colour in colours.items():
+        chosen = states == state
+        if chosen.any():
+            label = "unsafe: margin < 1" if state == "unsafe" else state
+            bottom.scatter(result.speeds_rpm[chosen], result.margin[chosen], color=colour, label=label, zorder=2)
+            top.scatter(result.speeds_rpm[chosen], 1e3 * result.wing_amplitude_mm[chosen], color=colour, zorder=3)
     bottom.axhline(1.0, color="tab:red", linewidth=1)
+    bottom.legend(loc="best")
     bottom.set_ylabel("safety margin (limit / amplitude)")
     bottom.set_xlabel("engine speed (rpm)")
     bottom.grid(True, alpha=0.3)

@@ -9,9 +9,11 @@ from pathlib import Path
 from tqdm import tqdm
 
 from contact import procedure
+from contact.procedure import RunStopped
 from contact.sliding import SlidingSolver
 from contact.solver import ContactSolver, ConvergenceError
 from contact.structure import ContactSpace
+from contact.verdict import Ending
 from pipelines.build import Model, build
 from pipelines.output.damage import DamageObserver
 from pipelines.output.paraview import (
@@ -56,9 +58,24 @@ class ProgressBar:
                              stick=f"{figures['stick_area_fraction']:.2f}", refresh=False)
         self.bar.update(1)
 
-    def close(self):
+    def close(self, reason: str | None = None, *, done: bool = False):
+        """Close the bar, saying ``reason`` (why the run ended); ``done``: the run answered its
+        question and the bar ends full (a run that shakes down early needs no more cycles)."""
         self._stop_clock()
+        if reason is not None and not self.bar.disable:
+            if done:
+                self.bar.total = self.bar.n
+            self.bar.set_postfix_str(reason, refresh=False)
+            self.bar.refresh()
         self.bar.close()
+
+
+#: Why a run ended, as its progress bar says it.
+ENDINGS = {Ending.COMPLETED: "all cycles run", Ending.SHAKEDOWN: "stuck: shaken down, no more cycles needed",
+           Ending.LOOSENING: "stopped: loosening evident", Ending.SLID_OFF: "stopped: the joint slides off",
+           Ending.WEAR_RUNAWAY: "stopped: runaway wear", Ending.DIVERGED: "stopped: an increment did not converge"}
+#: Runs that end early but answer the question: their results file is complete, marked with the ending.
+EARLY_ENDINGS = (Ending.SLID_OFF, Ending.WEAR_RUNAWAY)
 
 
 @dataclass
@@ -118,11 +135,18 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
                                observer=observer, checkpoint=writer.checkpoint,
                                checkpoint_every=settings.get("checkpoint_every", 10),
                                resume=writer.snapshot)
+    except RunStopped as stopped:
+        if stopped.ending in EARLY_ENDINGS:
+            writer.stop(stopped.ending)
+        else:
+            writer.abort()
+        bar.close(ENDINGS[stopped.ending])
+        raise
     except (ConvergenceError, KeyboardInterrupt):
         writer.abort()
         bar.close()
         raise
-    bar.close()
+    bar.close(ENDINGS[result.ending], done=True)
     stage_times.update({f"{name}_phase_s": seconds for name, seconds in bar.phase_times.items()})
     stage_times["procedure_s"] = time.perf_counter() - clock
     clock = time.perf_counter()

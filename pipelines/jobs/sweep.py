@@ -10,6 +10,7 @@ tests/bench/test_bench_distributed.py). Units: rpm, Hz, mm.
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -18,6 +19,17 @@ from mbs.parameters import ModelParams
 from mbs.sweep import SweepResult, collect_sweep, run_speed, write_sweep
 from pipelines.parallel import map_cases
 from reduction.errors import InputError
+
+SWEEP_FILE = "sweep.h5"
+
+
+def sweep_paths(out) -> tuple[Path, Path]:
+    """The sweep's output folder and file for ``--out``: a folder holds ``sweep.h5`` and the plots;
+    the older form, a file name ending in .h5, still names the file (the plots go beside it)."""
+    out = Path(out)
+    if out.suffix in (".h5", ".hdf5"):
+        return out.parent, out
+    return out, out / SWEEP_FILE
 
 
 def parse_speeds(text: str) -> np.ndarray:

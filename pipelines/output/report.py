@@ -87,8 +87,8 @@ def _job_section(path: Path, root: Path) -> str:
         return ""
     rows = []
     for key, value in summary.items():
-        if isinstance(value, (dict,)):
-            continue
+        if isinstance(value, dict) or (isinstance(value, list) and any(isinstance(v, (dict, list)) for v in value)):
+            continue  # tables of their own (a limit search's runs and changes)
         text = _value(value, None)
         if key in ("smallest_margin", "margin_at_operating_point") and isinstance(value, (int, float)) and value < 1:
             text = f"<span class='unsafe'>{text} (below 1: NOT SAFE)</span>"

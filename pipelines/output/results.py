@@ -3,7 +3,9 @@
 Layout (format_version 1; every dataset carries a ``units`` attribute):
 
     /                      attrs: fretwork_format="fretwork-results", format_version,
-                           scene_name, scene_toml, complete (False until the run ends)
+                           scene_name, scene_toml, complete (False until the run ends),
+                           ending (contact.verdict.Ending: completed, shakedown, loosening, or
+                           slid_off / wear_runaway: the cycles so far, without /final and /summary)
     /points/               coordinates (n, dim) mm, area (n,) mm² (mm in 2D), normal (n, dim),
                            initial_overclosure (n,) mm, facets (m, k) point indices of the
                            contact surface's facets (lines in 2D, quads/triangles in 3D)
@@ -316,7 +318,13 @@ class ResultsWriter(Observer):
         summary = self.file.create_group("summary")
         summary.attrs.update(verdict=result.verdict, stationary=result.stationary,
                              figures=json.dumps(result.figures))
-        self.file.attrs["complete"] = True
+        return self.stop(result.ending)
+
+    def stop(self, ending) -> Path:
+        """Mark the file with the run's :class:`contact.verdict.Ending`, close it and move it into
+        place; alone, for a run that ended early (slid off, runaway wear): the cycles so far."""
+        self._flush_increments()
+        self.file.attrs.update(complete=True, ending=ending.value)
         self.file.close()
         self.part_path.replace(self.final_path)
         self.checkpoint_path.unlink(missing_ok=True)

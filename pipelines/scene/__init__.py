@@ -98,12 +98,18 @@ def _anchored(data: dict, folder: Path) -> dict:
 def _read(path: Path, seen: tuple = ()) -> dict:
     """The TOML of a scene file with its ``scene.base`` chain resolved (relative to the file; the
     base's own relative files relative to the base)."""
+    if path.is_dir():
+        raise InputError(f"scene file {path} is a folder: give a scene file (.toml) in it")
     if not path.is_file():
         raise InputError(f"scene file {path} does not exist")
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"{path}: not valid TOML: {error}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"scene file {path} is not a text file (a scene is TOML text, UTF-8)") from None
+    except OSError as error:
+        raise InputError(f"scene file {path} cannot be read ({error.strerror})") from None
     base = data.get("scene", {}).get("base") if isinstance(data.get("scene"), dict) else None
     if base is None:
         return data
@@ -113,6 +119,11 @@ def _read(path: Path, seen: tuple = ()) -> dict:
     merged = _merged(_anchored(_read(base_path, seen + (base_path,)), base_path.parent), data)
     del merged["scene"]["base"]
     return merged
+
+
+def tables(path: str | Path) -> dict:
+    """The tables of a scene file (its ``scene.base`` chain resolved), not validated."""
+    return _read(Path(path))
 
 
 def load(path: str | Path, overrides: dict | None = None) -> Scene:

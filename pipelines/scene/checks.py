@@ -216,3 +216,76 @@ SEMANTIC_CHECKS = ((_check_effects, ("scene", "materials", "bodies", "coupling")
                    (_check_contact, ("scene", "bodies", "contact")),
                    (_check_bolts, ("scene", "bodies", "bolts")),
                    (_check_patterns, ("materials", "bodies")))
+
+
+# Plausibility: magnitudes that are valid but most likely a unit mistake. Each is a warning
+# (the scene still runs), naming the key and the unit it was probably written in.
+_METAL_DENSITY = 1.5e-9  # t/mm³: lighter than any structural metal (magnesium 1.7e-9)
+_METAL_NAMES = ("steel", "iron", "alumin", "titan", "copper", "brass", "bronze", "metal", "nickel")
+
+
+def _number(value) -> bool:
+    return isinstance(value, NUMBER) and not isinstance(value, bool)
+
+
+def _material_warnings(name, material) -> list[str]:
+    found = []
+    where = f"materials.{name}"
+    modulus, density = material.get("youngs_modulus"), material.get("density")
+    metal = (_number(density) and density >= _METAL_DENSITY) or any(m in name.lower() for m in _METAL_NAMES)
+    if _number(modulus) and 0 < modulus < 1000.0 and metal:
+        found.append(f"'{where}.youngs_modulus' = {modulus:g} MPa is below 1,000 MPa for a metal: probably GPa "
+                     f"(MPa expected: {modulus:g} GPa is {1e3 * modulus:g} MPa)")
+    elif _number(modulus) and modulus > 1e7:
+        found.append(f"'{where}.youngs_modulus' = {modulus:g} MPa is above any solid's: probably Pa "
+                     f"(MPa expected: {modulus:g} Pa is {1e-6 * modulus:g} MPa)")
+    for low, unit, scale in ((100.0, "kg/m³", 1e-12), (1e-3, "g/cm³", 1e-9), (1e-7, "kg/mm³", 1e-3)):
+        if _number(density) and density > low:
+            found.append(f"'{where}.density' = {density:g} t/mm³ is far heavier than any solid: probably {unit} "
+                         f"(t/mm³ expected: {density:g} {unit} is {scale * density:g} t/mm³)")
+            break
+    return found
+
+
+def plausibility(data: dict) -> list[str]:
+    """Warnings about magnitudes that are likely unit mistakes (mm, N, MPa, t, s expected); each
+    names its key and the unit it was probably written in. Reads unvalidated tables safely."""
+    found: list[str] = []
+
+    def table(name):
+        return data.get(name) if isinstance(data.get(name), dict) else {}
+
+    for name, material in table("materials").items():
+        if isinstance(material, dict):
+            found += _material_warnings(str(name), material)
+    amplitude = table("coupling").get("wing_amplitude")
+    if _number(amplitude) and amplitude > 10.0:
+        found.append(f"'coupling.wing_amplitude' = {amplitude:g} mm is larger than 10 mm: probably µm "
+                     f"(mm expected: {amplitude:g} µm is {1e-3 * amplitude:g} mm)")
+    elif _number(amplitude) and 0 < amplitude < 1e-3:
+        found.append(f"'coupling.wing_amplitude' = {amplitude:g} mm is below 1 µm: probably m "
+                     f"(mm expected: {amplitude:g} m is {1e3 * amplitude:g} mm)")
+    slip = table("contact").get("critical_slip")
+    if _number(slip) and slip > 1.0:
+        found.append(f"'contact.critical_slip' = {slip:g} mm is larger than 1 mm: probably µm "
+                     f"(mm expected: {slip:g} µm is {1e-3 * slip:g} mm)")
+    for name, bolt in table("bolts").items():
+        pretension = bolt.get("pretension") if isinstance(bolt, dict) else None
+        if _number(pretension) and 0 < pretension < 100.0:
+            found.append(f"'bolts.{name}.pretension' = {pretension:g} N is below 100 N: probably kN "
+                         f"(N expected: {pretension:g} kN is {1e3 * pretension:g} N)")
+    loads = data.get("body_loads") if isinstance(data.get("body_loads"), list) else []
+    for k, load in enumerate(entry for entry in loads if isinstance(entry, dict)):
+        acceleration = load.get("acceleration")
+        if isinstance(acceleration, list) and acceleration and all(_number(a) for a in acceleration):
+            size = sum(a * a for a in acceleration) ** 0.5
+            if 1.0 <= size <= 100.0:
+                found.append(f"'body_loads[{k}].acceleration' has magnitude {size:g} mm/s²: probably m/s² "
+                             f"(mm/s² expected: {size:g} m/s² is {1e3 * size:g} mm/s²)")
+        spin = load.get("angular_velocity")
+        if isinstance(spin, list) and spin and all(_number(w) for w in spin):
+            size = sum(w * w for w in spin) ** 0.5
+            if size > 1000.0:
+                found.append(f"'body_loads[{k}].angular_velocity' has magnitude {size:g} rad/s: probably rpm "
+                             f"(rad/s expected: {size:g} rpm is {size * 3.141592653589793 / 30:.4g} rad/s)")
+    return found

@@ -1,0 +1,211 @@
+"""Output folders: checked before any work, locked while in use, cleared of an earlier run's outputs;
+one message format for every command; negative option values; plausibility warnings."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipelines.cli.main import attach_negative_values, main
+from pipelines.output.locks import LOCK_NAME, check_folder, claim
+from pipelines.scene.checks import plausibility
+from reduction.errors import InputError
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+CYLINDER = EXAMPLES / "cylinder_on_plane.toml"
+
+
+def _dead_pid() -> int:
+    process = subprocess.Popen([sys.executable, "-c", "pass"])
+    process.wait()
+    return process.pid
+
+
+def test_a_claim_creates_locks_and_releases_the_folder(tmp_path):
+    out = tmp_path / "new" / "out"
+    with claim(out) as folder:
+        assert folder == out and (out / LOCK_NAME).read_text().split() == [str(os.getpid())]
+    assert out.is_dir() and not (out / LOCK_NAME).exists()
+
+
+def test_a_folder_in_use_is_refused_and_its_lock_kept(tmp_path):
+    (tmp_path / LOCK_NAME).write_text(f"{os.getpid()}\n")  # this process: alive
+    with pytest.raises(InputError, match=r"--out .* is in use by another fretwork command \(pid \d+\)"), \
+            claim(tmp_path):
+        pass
+    assert (tmp_path / LOCK_NAME).exists()
+
+
+def test_the_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
+    (tmp_path / LOCK_NAME).write_text(f"{_dead_pid()}\n")
+    with claim(tmp_path):
+        pass
+    assert not (tmp_path / LOCK_NAME).exists()
+
+
+def test_outputs_of_an_earlier_run_are_removed_after_the_input_is_checked(tmp_path):
+    (tmp_path / "plots").mkdir()
+    (tmp_path / "plots" / "old.png").write_bytes(b"png")
+    (tmp_path / "results.h5").write_bytes(b"h5")
+    (tmp_path / "mine.txt").write_text("the user's")
+    notes = []
+
+    def refuse():
+        raise InputError("bad scene")
+
+    with pytest.raises(InputError), claim(tmp_path, outputs=("plots", "results.h5"), ready=refuse, note=notes.append):
+        pass
+    assert (tmp_path / "results.h5").exists() and not notes  # refused input: nothing lost
+    with claim(tmp_path, outputs=("plots", "results.h5"), note=notes.append):
+        pass
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.txt"]
+    assert notes == [f"removed 2 output(s) of an earlier run from {tmp_path}: plots, results.h5"]
+
+
+def test_a_refused_command_leaves_no_folder_behind(tmp_path):
+    with pytest.raises(InputError), claim(tmp_path / "a" / "b"):
+        raise InputError("bad scene")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupted_command_leaves_no_half_written_files(tmp_path):
+    with pytest.raises(KeyboardInterrupt), claim(tmp_path) as folder:
+        (folder / "runs" / "a").mkdir(parents=True)
+        (folder / "runs" / "a" / "results.h5.part").write_bytes(b"part")
+        (folder / "runs" / "b").mkdir()
+        (folder / "runs" / "b" / "results.h5").write_bytes(b"whole")
+        raise KeyboardInterrupt
+    assert sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*")) == ["runs", "runs/b", "runs/b/results.h5"]
+
+
+@pytest.mark.parametrize("command", [
+    ["run", str(CYLINDER)], ["limit", str(EXAMPLES / "counterweight.toml"), "--amplitude", "100:200"],
+    ["mbs", str(EXAMPLES / "counterweight.toml")], ["sweep", str(EXAMPLES / "counterweight.toml"), "--speeds", "700"],
+    ["reduce", "mesh.inp", "--modes", "2"]])
+def test_every_command_refuses_an_output_folder_that_is_a_file(tmp_path, capsys, command):
+    afile = tmp_path / "afile.txt"
+    afile.write_text("not a folder")
+    assert main([*command, "--out", str(afile / "out")]) == 2
+    error = capsys.readouterr().err
+    assert error == f"fretwork: error: --out {afile / 'out'} lies below the file {afile}: give a folder (it is created if missing)\n"
+    assert sorted(tmp_path.iterdir()) == [afile]
+
+
+def test_export_fmu_refuses_an_output_in_a_system_folder(tmp_path, capsys):
+    assert main(["export-fmu", str(tmp_path / "results.h5"), "-o", "/proc/x/loads.fmu"]) == 2
+    assert capsys.readouterr().err == ("fretwork: error: -o /proc/x: /proc is a system folder, not a place for "
+                                       "results; give a folder of your own\n")
+
+
+def test_usage_errors_have_the_one_format(capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["limit", str(CYLINDER)])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err == ("fretwork: error: the following arguments are required: --amplitude "
+                                       "(see fretwork limit --help)\n")
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0 and capsys.readouterr().out.startswith("fretwork ")
+
+
+def test_negative_values_are_attached_to_their_options():
+    options = {"--probe", "--amplitude", "--out"}
+    assert attach_negative_values(["study", "x.toml", "--probe", "-65,0,0", "--probe", "1,2", "--json"], options) == [
+        "study", "x.toml", "--probe=-65,0,0", "--probe", "1,2", "--json"]
+    assert attach_negative_values(["--amplitude", "-.5:3", "--out", "-dir"], options) == [
+        "--amplitude=-.5:3", "--out", "-dir"]
+
+
+def test_a_negative_probe_reaches_the_command(tmp_path, capsys):
+    assert main(["study", "constant-cof", str(tmp_path / "none.toml"), "--probe", "-65,0,0"]) == 2
+    assert capsys.readouterr().err == f"fretwork: error: scene file {tmp_path / 'none.toml'} does not exist\n"
+    assert main(["study", "constant-cof", str(CYLINDER), "--probe", "-65,a"]) == 2
+    assert capsys.readouterr().err == ("fretwork: error: --probe '-65,a': give the point as x,y[,z] in mm, "
+                                       "e.g. --probe -65,0,0\n")
+
+
+def test_plausibility_names_the_key_and_the_likely_unit():
+    data = {"materials": {"steel": {"youngs_modulus": 210.0, "density": 7850.0},
+                          "ti64": {"youngs_modulus": 120000.0, "density": 4.43},
+                          "rubber": {"youngs_modulus": 5.0, "density": 1.1e-9}},
+            "coupling": {"wing_amplitude": 100.0}, "contact": {"critical_slip": 20.0},
+            "bolts": {"m42": {"pretension": 44.0}}, "body_loads": [{"acceleration": [0.0, -9.81, 0.0]}, {"angular_velocity": [0.0, 0.0, 1500.0]}]}
+    assert plausibility(data) == [
+        ("'materials.steel.youngs_modulus' = 210 MPa is below 1,000 MPa for a metal: probably GPa "
+         "(MPa expected: 210 GPa is 210000 MPa)"),
+        ("'materials.steel.density' = 7850 t/mm³ is far heavier than any solid: probably kg/m³ "
+         "(t/mm³ expected: 7850 kg/m³ is 7.85e-09 t/mm³)"),
+        ("'materials.ti64.density' = 4.43 t/mm³ is far heavier than any solid: probably g/cm³ "
+         "(t/mm³ expected: 4.43 g/cm³ is 4.43e-09 t/mm³)"),
+        "'coupling.wing_amplitude' = 100 mm is larger than 10 mm: probably µm (mm expected: 100 µm is 0.1 mm)",
+        "'contact.critical_slip' = 20 mm is larger than 1 mm: probably µm (mm expected: 20 µm is 0.02 mm)",
+        "'bolts.m42.pretension' = 44 N is below 100 N: probably kN (N expected: 44 kN is 44000 N)",
+        ("'body_loads[0].acceleration' has magnitude 9.81 mm/s²: probably m/s² "
+         "(mm/s² expected: 9.81 m/s² is 9810 mm/s²)"),
+        ("'body_loads[1].angular_velocity' has magnitude 1500 rad/s: probably rpm "
+         "(rad/s expected: 1500 rpm is 157.1 rad/s)")]
+    assert plausibility({"coupling": {"wing_amplitude": 1e-4}}) == [
+        "'coupling.wing_amplitude' = 0.0001 mm is below 1 µm: probably m (mm expected: 0.0001 m is 0.1 mm)"]
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in EXAMPLES.glob("*.toml")))
+def test_the_shipped_scenes_raise_no_plausibility_warning(name):
+    import tomllib
+
+    assert plausibility(tomllib.loads((EXAMPLES / f"{name}.toml").read_text())) == []
+
+
+def test_margins_below_one_are_unsafe_and_those_within_the_tolerance_at_the_limit():
+    from pipelines.jobs.limit import LimitResult
+    from pipelines.jobs.margins import MarginResult, describe_margins
+
+    limit = LimitResult(0.25, (0.24, 0.25), 0.01, range_mm=(0.1, 0.4))
+    amplitude = np.array([0.1, 0.245, 0.3])
+    result = MarginResult(np.array([600.0, 750.0, 900.0]), amplitude, 1.0, limit, 0.25 / amplitude, 900.0)
+    summary = result.to_json()
+    assert summary["unsafe_speeds"] == [900.0] and summary["at_limit_speeds"] == [750.0]
+    assert [result.state(k) for k in range(3)] == ["safe", "at the limit", "unsafe"]
+    assert describe_margins(result) == ("UNSAFE at 900 rpm: the wing vibration exceeds the stick limit (margin below 1); "
+                                        "at the limit at 750 rpm (within the limit's tolerance)")
+
+
+def test_a_run_that_ends_early_ends_its_progress_bar_full_with_the_reason(capsys):
+    from contact.verdict import Ending
+    from pipelines.jobs.run import ENDINGS, ProgressBar
+
+    bar = ProgressBar(100, True, "scene")
+    for _ in range(12):
+        bar.bar.update(1)
+    bar.close(ENDINGS[Ending.SHAKEDOWN], done=True)
+    assert (bar.bar.n, bar.bar.total) == (12, 12)
+    last = capsys.readouterr().err.replace("\r", "\n").splitlines()[-1]
+    assert "100%" in last and "12/12" in last and "stuck: shaken down, no more cycles needed" in last
+    stopped = ProgressBar(100, True, "scene")
+    stopped.bar.update(3)
+    stopped.close(ENDINGS[Ending.SLID_OFF])
+    last = capsys.readouterr().err.replace("\r", "\n").splitlines()[-1]
+    assert "3/100" in last and "stopped: the joint slides off" in last
+
+
+def test_a_folder_without_write_permission_is_refused(tmp_path, monkeypatch):
+    monkeypatch.setattr(os, "access", lambda path, mode: Path(path) != tmp_path)  # root may write anywhere
+    with pytest.raises(InputError, match=rf"^--out {tmp_path}/out: {tmp_path} is not writable \(permission denied\)$"):
+        check_folder(tmp_path / "out")
+
+
+def test_the_sweep_still_takes_a_file_name_and_says_that_out_is_a_folder(tmp_path, capsys):
+    assert main(["sweep", str(CYLINDER), "--speeds", "700", "--out", str(tmp_path / "old" / "sweep.h5")]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        (f"fretwork: note: --out {tmp_path}/old/sweep.h5 names a file: written, with the plots beside it "
+         f"(--out is a folder for every command: --out {tmp_path}/old writes {tmp_path}/old/sweep.h5)"),
+        (f"fretwork: error: {CYLINDER} has no [mbs] table: it does not describe a multibody model "
+         "(an empty [mbs] table runs the default generic engine)")]
+    assert list(tmp_path.iterdir()) == []
