@@ -1,9 +1,9 @@
-"""The shipped counterweight scenes reach the paper's verdicts (§3.3) at a coarse setting.
+"""The shipped counterweight scenes reach the paper's verdicts (§3.3) with their own settings.
 
-normal (100 µm) → stick; severe (230 µm) → stick after partial slip with the COF evolved;
-extreme (300 µm) → loosening, the clamp force still falling and the worn area growing.
-The scenes' own mesh and wear phase (65 × J 20); 40 COF cycles instead of 250 (the stuck cases
-are stationary after 11–17, and the COF of the extreme case is at μ_max where it slides by then).
+normal (100 µm) → stick at once, the COF evolved on a few per cent of the pads at most; severe
+(230 µm) → partial slip that shakes down to stick; extreme (300 µm) → loosening, the clamp force
+still falling and the worn area growing (stopped once loosening is evident, where the shipped
+scene runs on to its life horizon).
 """
 
 from __future__ import annotations
@@ -19,7 +19,6 @@ from pipelines.jobs.run import run_scene
 from pipelines.stages import StageCache
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
-COARSE = {"procedure.cof_cycles": 40}
 
 
 @pytest.fixture(scope="module")
@@ -27,9 +26,9 @@ def cache(tmp_path_factory):
     return StageCache(tmp_path_factory.mktemp("cw-cache"))
 
 
-def run(name, tmp_path, cache):
-    outcome = run_scene(scenes.load(EXAMPLES / f"{name}.toml", COARSE), tmp_path / name, progress=False,
-                        plots=False, cache=cache)
+def run(name, tmp_path, cache, overrides=None):
+    outcome = run_scene(scenes.load(EXAMPLES / f"{name}.toml", overrides or {}), tmp_path / name,
+                        progress=False, plots=False, cache=cache)
     with h5py.File(outcome.results_path) as results:
         figures = {k: results["cycles/figures"][k][:] for k in results["cycles/figures"]}
         phase = results["cycles/phase"][:]
@@ -42,24 +41,31 @@ def test_normal_operation_stays_stuck(tmp_path, cache):
     assert summary["wing_amplitude_mm"] == pytest.approx(0.1)
     assert not np.any(phase == 2)  # shaken down in the COF phase: no wear phase needed
     assert abs(summary["clamp_force_loss_fraction"]) < 1e-3
-    assert summary["min_stick_margin"] > 0.2
+    assert summary["cof_evolved_area_fraction"] <= 0.05  # the paper: full stick in normal operation
 
 
 def test_severe_overload_shakes_down_to_stick_after_partial_slip(tmp_path, cache):
     summary, figures, _ = run("counterweight_severe", tmp_path, cache)
-    assert summary["verdict"] == "stick"
+    assert summary["verdict"] == "stick" and summary["stationary"]
     assert figures["slip_area_fraction"][0] > 0.05  # partial slip at first ...
-    assert summary["cof_evolved_area_fraction"] > 0.3  # ... so the COF rose over a large area
-    assert summary["min_stick_margin"] < 0.2  # closer to the limit than normal operation
+    assert summary["cof_evolved_area_fraction"] > 0.1  # ... so the COF rose where it slid
+    assert summary["clamp_force_loss_fraction"] < 0.01  # shaken down before wear could loosen it
+    assert summary["shakedown_at_cycles"] == summary["equivalent_cycles"]
 
 
 def test_extreme_overload_loosens_under_wear(tmp_path, cache):
-    summary, figures, phase = run("counterweight_extreme", tmp_path, cache)
+    """Stopped once loosening is evident (the shipped scene runs on to its life horizon,
+    checked by the convergence study in the README)."""
+    summary, figures, phase = run("counterweight_extreme", tmp_path, cache,
+                                  {"procedure.stop_at_loosening": True})
     assert summary["verdict"] == "loosening"
+    assert summary["loosening_evident_at_cycles"] == pytest.approx(summary["equivalent_cycles"])
+    assert summary["loosening_evident_at_engine_hours"] == pytest.approx(
+        summary["equivalent_cycles"] / summary["load_cycle_frequency_hz"] / 3600.0)
     wear = phase == 2
     clamp = figures["clamp_force_N"][wear]
     stick = figures["stick_area_fraction"][wear]
     worn = figures["worn_area_fraction"][wear]
     assert clamp[-1] < clamp[-10] < clamp[0]  # still falling at the end
     assert stick[-1] < stick[0] - 0.1  # the stuck area shrinks
-    assert worn[-1] > worn[0] + 0.2 and worn[-1] > 0.4  # the worn area grows
+    assert worn[-1] > 0.5  # most of the contact has worn
