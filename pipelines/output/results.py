@@ -323,7 +323,7 @@ class ResultsWriter(Observer):
     def stop(self, ending) -> Path:
         """Mark the file with the run's :class:`contact.verdict.Ending`, close it and move it into
         place; alone, for a run that ended early (slid off, runaway wear): the cycles so far."""
-        self._flush_increments()
+        self._flush()
         self.file.attrs.update(complete=True, ending=ending.value)
         self.file.close()
         self.part_path.replace(self.final_path)
