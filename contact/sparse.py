@@ -156,8 +156,9 @@ class SparseNewtonSolver:
     preconditioned by a PARDISO LU of an earlier one.
 
     settings: relative_tolerance / final_tolerance bound the residual of the sparse system
-    relative to its right-hand side; fresh_iterations and max_iterations as in
-    :class:`contact.linear.KrylovSettings` (single_precision and direct_below do not apply).
+    relative to its right-hand side; fresh_iterations, max_iterations and single_precision (of
+    the preconditioner's factor) as in :class:`contact.linear.KrylovSettings` (direct_below
+    does not apply: the dense path is the one for small interfaces, see :func:`choose_path`).
     """
 
     def __init__(self, space: SparseContactSpace, settings: KrylovSettings = KrylovSettings()):
@@ -172,8 +173,10 @@ class SparseNewtonSolver:
 
     def description(self) -> str:
         """Which path solves this interface's Newton systems, in words (for run summaries)."""
+        precision = "single" if self.settings.single_precision else "double"
         return (f"sparse bodies ({self.space.model.n_dofs} DOFs, no dense W): GMRES on the uncondensed "
-                "tangent preconditioned by a PARDISO LU of an earlier one; W·λ by a sparse Cholesky solve")
+                f"tangent preconditioned by a {precision}-precision PARDISO LU of an earlier one; "
+                "W·λ by a sparse Cholesky solve")
 
     def solve(self, blocks: np.ndarray, r_kin: np.ndarray, r_ctl: np.ndarray,
               final: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -204,7 +207,7 @@ class SparseNewtonSolver:
 
     def _refactor(self, matrix: sp.csr_matrix) -> None:
         if self._factor is None:
-            self._factor = _SparseLU(matrix)
+            self._factor = _SparseLU(matrix, self.settings.single_precision)
         self._factor.factorise(matrix)
         self._solve_work, self._rebuild_work = self._factor.solve_flops, self._factor.factor_flops
         self._lost_work = 0.0
@@ -219,12 +222,14 @@ class _SparseLU:
     """MKL PARDISO LU (real unsymmetric) of matrices on one sparsity pattern: the ordering and
     symbolic analysis once, then a numeric factorisation per :meth:`factorise`.
 
+    single: factorise and solve in single precision (half the memory and memory traffic of
+    the factor; a preconditioner needs no more than its 1e-7 relative accuracy).
     factor_flops and solve_flops: the work of one factorisation (as PARDISO reports it) and of
     one solve (4 flops per factor entry: forward and backward substitution)."""
 
     _MTYPE = 11  # real unsymmetric
 
-    def __init__(self, pattern: sp.csr_matrix):
+    def __init__(self, pattern: sp.csr_matrix, single: bool = True):
         if not pardiso.available():
             raise RuntimeError("the sparse contact path needs MKL PARDISO (pip install pypardiso)")
         pattern.sort_indices()
@@ -240,24 +245,26 @@ class _SparseLU:
         self.iparm[12] = 1  # ... weighted matching, the defaults for unsymmetric matrices
         self.iparm[17] = -1  # report the factor's nonzeros ...
         self.iparm[18] = -1  # ... and its Mflops
+        self.iparm[27] = int(single)  # a, b and x in single precision
         self.iparm[34] = 1  # zero-based indices
-        self.values = np.ascontiguousarray(pattern.data, dtype=np.float64)
+        self.dtype = np.float32 if single else np.float64
+        self.values = np.ascontiguousarray(pattern.data, dtype=self.dtype)
         self._finalizer = weakref.finalize(self, _release, self.state, self.iparm, self._MTYPE)
-        self._call(11, np.zeros(self.n), np.zeros(self.n))
+        self._call(11, np.zeros(self.n, self.dtype), np.zeros(self.n, self.dtype))
         self.factor_flops = 1e6 * float(self.iparm[18])
         self.solve_flops = 4.0 * float(self.iparm[17])
 
     def factorise(self, matrix: sp.csr_matrix) -> None:
         """Numeric LU of ``matrix`` (same sparsity pattern as the one analysed)."""
-        self.values = np.ascontiguousarray(matrix.data, dtype=np.float64)
-        self._call(22, np.zeros(self.n), np.zeros(self.n))
+        self.values = np.ascontiguousarray(matrix.data, dtype=self.dtype)
+        self._call(22, np.zeros(self.n, self.dtype), np.zeros(self.n, self.dtype))
         self.factor_flops = 1e6 * float(self.iparm[18])
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
-        rhs = np.ascontiguousarray(rhs, dtype=np.float64)
+        rhs = np.ascontiguousarray(rhs, dtype=self.dtype)
         out = np.zeros_like(rhs)
         self._call(33, rhs, out)
-        return out
+        return out.astype(np.float64, copy=False)
 
     def _call(self, phase: int, rhs: np.ndarray, out: np.ndarray) -> None:
         error = ctypes.c_int32(0)
@@ -266,12 +273,11 @@ class _SparseLU:
             self.state.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)), ctypes.byref(ctypes.c_int32(1)),
             ctypes.byref(ctypes.c_int32(1)), ctypes.byref(ctypes.c_int32(self._MTYPE)),
             ctypes.byref(ctypes.c_int32(phase)), ctypes.byref(ctypes.c_int32(self.n)),
-            self.values.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            self.values.ctypes.data_as(ctypes.c_void_p),
             self.row_start.ctypes.data_as(integer), self.columns.ctypes.data_as(integer),
             np.zeros(1, dtype=np.int32).ctypes.data_as(integer), ctypes.byref(ctypes.c_int32(1)),
             self.iparm.ctypes.data_as(integer), ctypes.byref(ctypes.c_int32(0)),
-            rhs.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-            out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), ctypes.byref(error))
+            rhs.ctypes.data_as(ctypes.c_void_p), out.ctypes.data_as(ctypes.c_void_p), ctypes.byref(error))
         if error.value != 0:
             raise np.linalg.LinAlgError(f"MKL PARDISO failed on the contact tangent (error {error.value})")
 

@@ -170,7 +170,9 @@ def drive(solver, state: ContactState, case: FlatOnFlat, *, label: str, points: 
 
 def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> tuple[dict, dict]:
     """Set up and run the case with the ``condensed``, ``dense`` (condensed, exact dense LU in
-    every Newton iteration) or ``full`` solver: (summary, fields).
+    every Newton iteration), ``sparse`` (:mod:`contact.sparse`: bodies kept sparse, no dense W),
+    ``auto`` (``sparse`` or ``condensed`` by :func:`contact.sparse.choose_path`) or ``full``
+    solver: (summary, fields).
 
     setup_s is the condensation (assemble, split into condense_s: coupling and Schur
     complements of the bodies, and contact_space_s: the elimination to W, E, S_q) or the
@@ -183,7 +185,11 @@ def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> t
     from contact.solver import ContactSolver, NewtonSettings
     from contact.structure import ContactSpace
 
+    from contact.sparse import choose_path
+
     case = flat_on_flat(points_per_side, increments_per_quarter=increments_per_quarter)
+    if solver == "auto":  # what a run would choose: the dense W below the measured threshold
+        solver = "sparse" if choose_path(points_per_side**2, 3) == "sparse" else "condensed"
     start = time.perf_counter()
     split = {}
     if solver in ("condensed", "dense"):
@@ -196,12 +202,20 @@ def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> t
         engine = ContactSolver(ContactSpace(structure), case.law, NewtonSettings(linear=linear))
         dofs = structure.n_dofs
         split["contact_space_s"] = time.perf_counter() - start - split["condense_s"]
+    elif solver == "sparse":
+        from contact.sparse import SparseContactSpace
+
+        model = full_model.build(case.bodies, case.slave, case.master, loads=case.loads,
+                                 motions=case.motions)
+        split["condense_s"] = time.perf_counter() - start
+        engine, dofs = ContactSolver(SparseContactSpace(model), case.law), model.n_dofs
+        split["contact_space_s"] = time.perf_counter() - start - split["condense_s"]
     elif solver == "full":
         model = full_model.build(case.bodies, case.slave, case.master, loads=case.loads,
                                  motions=case.motions)
         engine, dofs = full_model.FullModelSolver(model, case.law), model.n_dofs
     else:
-        raise ValueError(f"solver must be 'condensed', 'dense' or 'full', got {solver!r}")
+        raise ValueError(f"solver must be 'condensed', 'dense', 'sparse', 'auto' or 'full', got {solver!r}")
     setup = time.perf_counter() - start
     record, fields = drive(engine, case.initial_state(engine.n_points), case, label=solver,
                            points=engine.n_points, dofs=dofs, setup_time=setup)
@@ -209,6 +223,7 @@ def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> t
     summary["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     if solver != "full":
         summary["linear"] = dict(vars(engine.linear.counters))
+        summary["linear_solver"] = engine.linear.description()
     return summary, fields
 
 
@@ -245,7 +260,7 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = argparse.ArgumentParser(description=main.__doc__)
     parser.add_argument("points_per_side", type=int)
-    parser.add_argument("solver", choices=("condensed", "dense", "full"))
+    parser.add_argument("solver", choices=("condensed", "dense", "sparse", "auto", "full"))
     parser.add_argument("fields", type=Path, help="where to write the final per-point fields (.npz)")
     parser.add_argument("--increments-per-quarter", type=int, default=4)
     args = parser.parse_args(argv)
