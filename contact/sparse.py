@@ -129,7 +129,7 @@ class SparseContactSpace:
     def n_control(self) -> int:
         return self.control_dofs.size
 
-    def with_control_stiffness(self, extra: np.ndarray) -> "SparseContactSpace":
+    def with_control_stiffness(self, extra: np.ndarray) -> SparseContactSpace:
         raise NotImplementedError("locked bolts are not supported on the sparse path yet")
 
     def driving(self, amplitudes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -146,7 +146,8 @@ class SparseContactSpace:
         forces[rows] = change
         return self.compliance(forces)
 
-    def linear_solver(self, settings: KrylovSettings = KrylovSettings()) -> "SparseNewtonSolver":
+    def linear_solver(self, settings: KrylovSettings | None = None) -> SparseNewtonSolver:
+        """The solver of this space's Newton corrections."""
         return SparseNewtonSolver(self, settings)
 
 
@@ -161,9 +162,9 @@ class SparseNewtonSolver:
     does not apply: the dense path is the one for small interfaces, see :func:`choose_path`).
     """
 
-    def __init__(self, space: SparseContactSpace, settings: KrylovSettings = KrylovSettings()):
+    def __init__(self, space: SparseContactSpace, settings: KrylovSettings | None = None):
         self.space = space
-        self.settings = settings
+        self.settings = KrylovSettings() if settings is None else settings
         self.counters = KrylovCounters()
         self._assembler = TangentAssembler(space._stiffness_aq, space._G_aq, space.structure.dim)
         self._factor = None

@@ -235,7 +235,8 @@ class ContactSpace:
 
     def linear_solver(self, settings=None):
         """The solver of this space's Newton corrections (:class:`contact.linear.NewtonLinearSolver`)."""
-        from contact.linear import KrylovSettings, NewtonLinearSolver  # linear imports this module
+        # contact.linear imports this module
+        from contact.linear import KrylovSettings, NewtonLinearSolver
 
         return NewtonLinearSolver(self, KrylovSettings() if settings is None else settings)
 
