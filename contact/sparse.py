@@ -57,6 +57,31 @@ def choose_path(n_points: int, dim: int) -> str:
     return "sparse" if dim == 3 and n_points >= SPARSE_FROM_POINTS else "dense"
 
 
+def contact_space(bodies: list, slave: tuple, master: tuple, *, loads: dict | None = None,
+                  motions: dict | None = None, path: str = "auto"):
+    """The contact space of bodies and a surface pair (the arguments of
+    :func:`contact.assembly.assemble`) on the ``path`` "dense" (condensed bodies, dense W),
+    "sparse" (this module) or "auto" (:func:`choose_path` by the slave surface's node count,
+    one contact point per node). Returns (space, path taken)."""
+    from contact.assembly import assemble
+    from contact.full_model import build
+    from contact.interface import surface_from_facets
+    from contact.structure import ContactSpace
+    from reduction.errors import InputError
+
+    if path not in ("auto", "dense", "sparse"):
+        raise InputError(f"contact path must be auto, dense or sparse, got {path!r}")
+    if path == "auto":
+        body = next((b for b in bodies if b.name == slave[0]), None)
+        if body is None:
+            raise InputError(f"slave surface names body {slave[0]!r}, which is not defined")
+        surface = surface_from_facets(body.elastic.mesh, slave[1], f"{slave[0]} surface")
+        path = choose_path(surface.nodes.size, body.elastic.dim)
+    if path == "sparse":
+        return SparseContactSpace(build(bodies, slave, master, loads=loads, motions=motions)), path
+    return ContactSpace(assemble(bodies, slave, master, loads=loads, motions=motions).structure), path
+
+
 @dataclass(frozen=True)
 class SparseInterface:
     """What the solver reads of an interface's structure (the :class:`contact.structure.Structure`

@@ -13,8 +13,9 @@ from contact import full_model
 from contact.assembly import assemble
 from contact.linear import KrylovSettings
 from contact.solver import ContactSolver, NewtonSettings
-from contact.sparse import SparseContactSpace, choose_path
+from contact.sparse import SparseContactSpace, choose_path, contact_space
 from contact.structure import ContactSpace
+from reduction.errors import InputError
 from tests.bench.bench_report import flat_on_flat
 from tests.contact.test_linear import _full_system, _tangent
 
@@ -79,6 +80,17 @@ def test_a_cyclic_history_ends_where_the_dense_path_ends(spaces):
             assert "sparse" in solver.linear.description()
     assert _relative(fields[1], fields[0]) < 1e-8
     assert np.any(fields[0][len(equilibrium.forces):] > case.cof0)  # the COF evolved: points slid
+
+
+def test_contact_space_takes_the_path_asked_for(spaces):
+    case, dense, _ = spaces
+    arguments = (case.bodies, case.slave, case.master)
+    space, path = contact_space(*arguments, loads=case.loads, motions=case.motions)
+    assert path == "dense" and isinstance(space, ContactSpace)  # 36 points: below the threshold
+    space, path = contact_space(*arguments, loads=case.loads, motions=case.motions, path="sparse")
+    assert path == "sparse" and isinstance(space, SparseContactSpace) and space.n_rows == dense.n_rows
+    with pytest.raises(InputError):
+        contact_space(*arguments, path="fast")
 
 
 def test_the_sparse_path_is_chosen_for_large_3d_interfaces():
