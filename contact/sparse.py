@@ -20,11 +20,13 @@ sparse system of the uncondensed tangent (the full model's Newton matrix):
 
     [[K_aa + Gᵀ·B·G, K_aq], [K_qa, K_qq]]·[w, y] = [−Gᵀ·B·b, c].
 
-That matrix changes with the tangent; it is solved by GMRES preconditioned with a sparse LU
-(MKL PARDISO) of the same matrix for an earlier tangent, kept across Newton iterations and
-increments, rebuilt when the Krylov work lost to its age exceeds what the rebuild costs
-(counted in the factor's flops, not in seconds: the results do not depend on the machine's
-load). Memory and time grow with the sparse factors, about n·log n for these quasi-2D
+That matrix changes with the tangent; it is solved by GMRES preconditioned with a sparse
+Cholesky factor (MKL PARDISO, single precision) of K + Gᵀ·B₀·G, B₀ the diagonal of an earlier
+tangent: symmetric positive definite, half the memory of an LU, and as good a preconditioner
+as the LU of the earlier tangent itself (measured: the same Krylov iterations within 1 %).
+It is kept across Newton iterations and increments and rebuilt when the Krylov work lost
+to its age exceeds what the rebuild costs (counted in the factor's flops, not in seconds:
+the results do not depend on the machine's load). Memory and time grow with the sparse factors, about n·log n for these quasi-2D
 interface bodies, not n².
 
 Units: mm, N, N/mm.
@@ -179,7 +181,10 @@ class SparseContactSpace:
 class SparseNewtonSolver:
     """Newton corrections of a :class:`SparseContactSpace` (the interface of
     :class:`contact.linear.NewtonLinearSolver`): GMRES on the uncondensed tangent,
-    preconditioned by a PARDISO LU of an earlier one.
+    preconditioned by a PARDISO factor of an earlier one.
+
+    reference: "diagonal" (the default: Cholesky of K + Gᵀ·diag(B)·G, B the tangent blocks
+    clipped at zero) or "tangent" (LU of the earlier tangent itself).
 
     settings: relative_tolerance / final_tolerance bound the residual of the sparse system
     relative to its right-hand side; fresh_iterations, max_iterations and single_precision (of
@@ -187,11 +192,17 @@ class SparseNewtonSolver:
     does not apply: the dense path is the one for small interfaces, see :func:`choose_path`).
     """
 
-    def __init__(self, space: SparseContactSpace, settings: KrylovSettings | None = None):
+    def __init__(self, space: SparseContactSpace, settings: KrylovSettings | None = None,
+                 reference: str = "diagonal"):
         self.space = space
         self.settings = KrylovSettings() if settings is None else settings
         self.counters = KrylovCounters()
         self._assembler = TangentAssembler(space._stiffness_aq, space._G_aq, space.structure.dim)
+        pattern = self._assembler.matrix(np.zeros((space.structure.n_points, space.structure.dim,
+                                                   space.structure.dim)))
+        self._upper = np.flatnonzero(np.repeat(np.arange(pattern.shape[0]), np.diff(pattern.indptr))
+                                     <= pattern.indices)
+        self.reference = reference
         self._factor = None
         self._stale = True
         self._lost_work = 0.0
@@ -201,7 +212,8 @@ class SparseNewtonSolver:
         """Which path solves this interface's Newton systems, in words (for run summaries)."""
         precision = "single" if self.settings.single_precision else "double"
         return (f"sparse bodies ({self.space.model.n_dofs} DOFs, no dense W): GMRES on the uncondensed "
-                f"tangent preconditioned by a {precision}-precision PARDISO LU of an earlier one; "
+                f"tangent preconditioned by a {precision}-precision PARDISO factor of an earlier one "
+                f"({self.reference}); "
                 "W·λ by a sparse Cholesky solve")
 
     def solve(self, blocks: np.ndarray, r_kin: np.ndarray, r_ctl: np.ndarray,
@@ -214,11 +226,11 @@ class SparseNewtonSolver:
         rhs = np.concatenate([-(space._GcT @ tangent_b), -r_ctl])
         tolerance = self.settings.final_tolerance if final else self.settings.relative_tolerance
         if self._stale or self._factor is None:
-            self._refactor(matrix)
+            self._refactor(blocks)
         solution, iterations = _gmres(lambda x: matrix @ x, self._precondition, rhs, tolerance,
                                       self.settings.max_iterations)
         if solution is None:
-            self._refactor(matrix)
+            self._refactor(blocks)
             solution, more = _gmres(lambda x: matrix @ x, self._precondition, rhs, tolerance,
                                     self.settings.max_iterations)
             iterations += more
@@ -231,10 +243,27 @@ class SparseNewtonSolver:
         n_a = space.other_dofs.size
         return b + space.Gc @ solution[:n_a], solution[n_a:]
 
-    def _refactor(self, matrix: sp.csr_matrix) -> None:
-        if self._factor is None:
-            self._factor = _SparseLU(matrix, self.settings.single_precision)
-        self._factor.factorise(matrix)
+    def _refactor(self, blocks: np.ndarray) -> None:
+        if self.reference == "diagonal":
+            # K + Gᵀ·B₀·G with B₀ the diagonal of the tangent, clipped at zero: symmetric
+            # positive definite (a Cholesky factor, half an LU), and it does not age with the
+            # normal-tangential coupling dτ/dh, which changes sign with the slip direction.
+            dim = blocks.shape[1]
+            diagonal = np.zeros_like(blocks)
+            diagonal[:, np.arange(dim), np.arange(dim)] = np.maximum(np.diagonal(blocks, axis1=1, axis2=2), 0.0)
+            matrix = self._assembler.matrix(diagonal)
+            upper = sp.csr_matrix((matrix.data[self._upper], matrix.indices[self._upper],
+                                   np.concatenate([[0], np.cumsum(np.bincount(
+                                       np.repeat(np.arange(matrix.shape[0]), np.diff(matrix.indptr))[self._upper],
+                                       minlength=matrix.shape[0]))])), shape=matrix.shape)
+            if self._factor is None:
+                self._factor = _SparseLU(upper, self.settings.single_precision, mtype=2)
+            self._factor.factorise(upper)
+        else:
+            matrix = self._assembler.matrix(blocks)
+            if self._factor is None:
+                self._factor = _SparseLU(matrix, self.settings.single_precision)
+            self._factor.factorise(matrix)
         self._solve_work, self._rebuild_work = self._factor.solve_flops, self._factor.factor_flops
         self._lost_work = 0.0
         self._stale = False
@@ -245,17 +274,18 @@ class SparseNewtonSolver:
 
 
 class _SparseLU:
-    """MKL PARDISO LU (real unsymmetric) of matrices on one sparsity pattern: the ordering and
-    symbolic analysis once, then a numeric factorisation per :meth:`factorise`.
+    """MKL PARDISO factor of matrices on one sparsity pattern: the ordering and symbolic
+    analysis once, then a numeric factorisation per :meth:`factorise`. mtype 11: LU of a real
+    unsymmetric matrix; 2: Cholesky of a symmetric positive definite one, given by its upper
+    triangle.
 
     single: factorise and solve in single precision (half the memory and memory traffic of
     the factor; a preconditioner needs no more than its 1e-7 relative accuracy).
     factor_flops and solve_flops: the work of one factorisation (as PARDISO reports it) and of
     one solve (4 flops per factor entry: forward and backward substitution)."""
 
-    _MTYPE = 11  # real unsymmetric
-
-    def __init__(self, pattern: sp.csr_matrix, single: bool = True):
+    def __init__(self, pattern: sp.csr_matrix, single: bool = True, mtype: int = 11):
+        self._MTYPE = mtype  # 11 real unsymmetric, 2 symmetric positive definite (upper triangle)
         if not pardiso.available():
             raise RuntimeError("the sparse contact path needs MKL PARDISO (pip install pypardiso)")
         pattern.sort_indices()
@@ -267,8 +297,8 @@ class _SparseLU:
         self.iparm[0] = 1  # own settings below
         self.iparm[1] = 2  # METIS nested dissection ordering
         self.iparm[9] = 13  # pivot perturbation 1e-13
-        self.iparm[10] = 1  # scaling and ...
-        self.iparm[12] = 1  # ... weighted matching, the defaults for unsymmetric matrices
+        self.iparm[10] = int(mtype == 11)  # scaling and ...
+        self.iparm[12] = int(mtype == 11)  # ... weighted matching, the defaults for unsymmetric matrices
         self.iparm[17] = -1  # report the factor's nonzeros ...
         self.iparm[18] = -1  # ... and its Mflops
         self.iparm[27] = int(single)  # a, b and x in single precision

@@ -13,7 +13,12 @@ from contact import full_model
 from contact.assembly import assemble
 from contact.linear import KrylovSettings
 from contact.solver import ContactSolver, NewtonSettings
-from contact.sparse import SparseContactSpace, choose_path, contact_space
+from contact.sparse import (
+    SparseContactSpace,
+    SparseNewtonSolver,
+    choose_path,
+    contact_space,
+)
 from contact.structure import ContactSpace
 from reduction.errors import InputError
 from tests.bench.bench_report import flat_on_flat
@@ -49,14 +54,15 @@ def test_operators_equal_the_condensed_ones(spaces):
     assert _relative(sparse.compliance_of_change(rows, forces[rows]), dense.W[rows].T @ forces[rows]) < 1e-10
 
 
+@pytest.mark.parametrize("reference", ["diagonal", "tangent"])
 @pytest.mark.parametrize("opened", [0, 7])
-def test_newton_correction_equals_the_dense_solve(spaces, opened):
+def test_newton_correction_equals_the_dense_solve(spaces, opened, reference):
     case, dense, sparse = spaces
     blocks = _tangent(case, dense, opened)
     rng = np.random.default_rng(2)
     r_kin, r_ctl = rng.normal(0.0, 1e-4, dense.n_rows), rng.normal(0.0, 10.0, dense.n_control)
     expected = np.linalg.solve(_full_system(dense, blocks), -np.concatenate([r_kin, r_ctl]))
-    solver = sparse.linear_solver(KrylovSettings(relative_tolerance=1e-12))
+    solver = SparseNewtonSolver(sparse, KrylovSettings(relative_tolerance=1e-12), reference=reference)
     got = np.concatenate(solver.solve(blocks, r_kin, r_ctl))
     assert _relative(got, expected) < 1e-9
     # an aged preconditioner (the tangent of another status) still gives the exact correction
