@@ -135,6 +135,8 @@ class RunRecord:
             "cycle_s": float(times.sum()),
             "increment_mean_cpu_s": float(cpu_times.mean()), "cycle_cpu_s": float(cpu_times.sum()),
             "history_s": float(np.sum(self.increment_times)),
+            "history_cpu_s": float(np.sum(self.increment_cpu_times)),
+            "history_max_cpu_s": float(np.max(self.increment_cpu_times)),
             "newton_mean": float(iterations.mean()),
             "newton_max": int(np.max(self.max_iterations[cycle])),
             "newton_max_history": int(np.max(self.max_iterations)),
