@@ -54,6 +54,14 @@ from reduction.threads import single_threaded_blas
 SPARSE_FROM_POINTS = 2500
 
 
+#: how many times faster per flop a factorisation runs than a solve (dense BLAS3 blocks
+#: against a memory-bound substitution): the rebuild's work in solve flops is its flops over
+#: this. Measured at 900 points (PARDISO, one thread): 1 rebuilds too late (the first
+#: reference, from the contact search, is kept too long: 480 Krylov iterations in the
+#: history, 0.31 s per increment), 3 gives 301 and 0.27 s, 10 rebuilds too often (0.33 s).
+FACTOR_FLOP_RATE = 3.0
+
+
 def choose_path(n_points: int, dim: int) -> str:
     """"dense" or "sparse" for an interface of ``n_points`` contact points in ``dim`` D."""
     return "sparse" if dim == 3 and n_points >= SPARSE_FROM_POINTS else "dense"
@@ -264,7 +272,8 @@ class SparseNewtonSolver:
             if self._factor is None:
                 self._factor = _SparseLU(matrix, self.settings.single_precision)
             self._factor.factorise(matrix)
-        self._solve_work, self._rebuild_work = self._factor.solve_flops, self._factor.factor_flops
+        self._solve_work = self._factor.solve_flops
+        self._rebuild_work = self._factor.factor_flops / FACTOR_FLOP_RATE
         self._lost_work = 0.0
         self._stale = False
         self.counters.factorisations += 1
