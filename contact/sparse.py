@@ -47,10 +47,12 @@ from reduction import pardiso
 from reduction.factorization import factorize
 from reduction.threads import single_threaded_blas
 
-#: contact points from which the sparse path is chosen (3D). Measured with the flat-on-flat
-#: benchmark (tests/bench/test_bench_scale.py): at 1,600 points the dense path's GMRES is
-#: faster per increment; from ~2,500 points its W and condensed stiffness no longer fit in
-#: a few GB (3,600 points: 11.5 GB), while the sparse factors grow about linearly.
+#: contact points from which the sparse path is chosen (3D), set by memory, measured with
+#: the flat-on-flat benchmark (tests/bench/test_bench_scale.py): the dense path's set-up needs
+#: 11.5 GB at 3,600 points, growing as n², so 6 GB (the target of issue 14) at ~2,600; the
+#: sparse one needs 1.7 GB at 1,600 points and 3.1 GB at 3,600. In time the dense path is
+#: ahead there (1,600 points: 0.17 s per increment against 0.69 s), its per-increment cost
+#: growing as n² against about n for the sparse one.
 SPARSE_FROM_POINTS = 2500
 
 
