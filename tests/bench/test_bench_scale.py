@@ -13,7 +13,8 @@ same run. Rows whose estimated set-up memory exceeds FRETWORK_BENCH_MEMORY_GB
 (default 8, the share of a shared 2-core, 24 GB machine) or whose dense run would take hours
 are reported as not run, with the reason. Times are CPU seconds of the process (single-
 threaded BLAS: on a shared machine they measure the work, not the neighbours' load); the
-load average is printed with the table. per_increment_ms is the mean over the last cycle,
+load average is printed with the table (flat-on-flat set-up: CPU s too; the counterweight
+and cylinder rows' set-up is wall time). per_increment_ms is the mean over the last cycle,
 max_increment_ms (flat-on-flat) the most expensive increment of the history: on the sparse
 path the one that factorises the preconditioner, which set-up does not include. Writes
 results/bench/scale.json.
@@ -52,7 +53,7 @@ def _flat(side: int, solver: str, folder: Path) -> dict:
     assert done.returncode == 0, done.stderr[-3000:]
     out = json.loads(done.stdout.strip().splitlines()[-1])
     path = "sparse" if out["solver"] == "sparse" else "dense W"
-    return {"points": out["points"], "setup_s": out["setup_s"], "per_increment_ms": 1e3 * out["increment_mean_cpu_s"],
+    return {"points": out["points"], "setup_s": out["setup_cpu_s"], "per_increment_ms": 1e3 * out["increment_mean_cpu_s"],
             "newton": out["newton_mean"], "peak_mb": out["peak_rss_mb"], "fields": fields, "path": path,
             "krylov": out["linear"]["krylov_iterations"], "factorisations": out["linear"]["factorisations"],
             "max_increment_ms": 1e3 * out["history_max_cpu_s"], "history_s": out["history_cpu_s"]}
@@ -85,10 +86,16 @@ def _difference(a: Path, b: Path) -> float:
 #: (GMRES to 1e-12 in the last steps: 7e-7; to 1e-7: 1e-7); its fields after the COF phase
 #: agree to 2e-9, and the verdict must be the same.
 LOOSENING_TOLERANCE = 1e-6
+#: flat-on-flat (1,600 points): pressures agree to 1e-13 whatever the path, shears and COFs to
+#: 3-5e-8 (the shipped dense-W GMRES and the sparse path alike, against the dense LU, in the
+#: same run). That is Newton's own floor: its 1e-10 mm kinematic tolerance times the stick
+#: stiffness μ·p/γ_crit (2e4 N/mm³ at 100 MPa) is 2e-6 MPa, 5e-8 of the 40 MPa peak shear;
+#: closer agreement would need a tighter Newton tolerance, not another linear solver.
+FLAT_TOLERANCE = 1e-7
 CASES = [  # (label, runner, arguments, reason not to run the dense reference, tolerance)
-    ("flat-on-flat 1,600", _flat, (40,), None, 1e-8),
-    ("flat-on-flat 3,600", _flat, (60,), None, 1e-8),
-    ("flat-on-flat 10,000", _flat, (100,), None, 1e-8),
+    ("flat-on-flat 1,600", _flat, (40,), None, FLAT_TOLERANCE),
+    ("flat-on-flat 3,600", _flat, (60,), None, FLAT_TOLERANCE),
+    ("flat-on-flat 10,000", _flat, (100,), None, FLAT_TOLERANCE),
     ("CW extreme 10 mm", _scene, ("counterweight_extreme", 10.0), None, LOOSENING_TOLERANCE),
     ("CW extreme 5 mm", _scene, ("counterweight_extreme", 5.0), None, 1e-8),
     ("CW extreme 2.5 mm", _scene, ("counterweight_extreme", 2.5), DENSE_HOURS, 1e-8),
