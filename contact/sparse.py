@@ -50,9 +50,9 @@ from reduction.threads import single_threaded_blas
 #: contact points from which the sparse path is chosen (3D), set by memory, measured with
 #: the flat-on-flat benchmark (tests/bench/test_bench_scale.py): the dense path's set-up needs
 #: 11.5 GB at 3,600 points, growing as n², so 6 GB (the target of issue 14) at ~2,600; the
-#: sparse one needs 1.7 GB at 1,600 points and 3.1 GB at 3,600. In time the dense path is
-#: ahead there (1,600 points: 0.17 s per increment against 0.69 s), its per-increment cost
-#: growing as n² against about n for the sparse one.
+#: sparse one needs 1.1 GB at 1,600 points and 2.7 GB at 3,600. In time the dense path is
+#: ahead there (1,600 points: 0.12 s of CPU per increment against 0.55 s), its
+#: per-increment cost growing as n² against about n for the sparse one.
 SPARSE_FROM_POINTS = 2500
 
 
