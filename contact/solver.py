@@ -134,13 +134,13 @@ class ContactSolver:
         self.space = space
         self.law = law
         self.settings = settings
-        self.linear = linear if linear is not None else NewtonLinearSolver(space, settings.linear)
+        self.linear = linear if linear is not None else space.linear_solver(settings.linear)
         structure = space.structure
         self.dim = structure.dim
         self.n_points = structure.n_points
         self.area = structure.area
         self.h0 = structure.initial_overclosure
-        self.stiffness_scale = float(np.abs(np.diag(structure.stiffness)).max())  # N/mm
+        self.stiffness_scale = space.stiffness_scale  # N/mm
         self.rigid_modes = _rigid_modes(space, self.stiffness_scale)
         self._last_failure = None  # (response, r_ctl, force scale, loaded) of the last failed attempt
         self._last_compliance = None  # (λ, W·λ) of the last residual
@@ -153,7 +153,7 @@ class ContactSolver:
     def forget_cached_factorisations(self) -> None:
         """Drop the factorisations the linear solver keeps across increments (a checkpoint
         boundary: a resumed run then starts from the same solver state as an uninterrupted one)."""
-        self.linear = NewtonLinearSolver(self.space, self.linear.settings)
+        self.linear = self.space.linear_solver(self.linear.settings)
         self._last_compliance = None
 
     def initial_equilibrium(self) -> Equilibrium:
@@ -182,10 +182,10 @@ class ContactSolver:
         if last is not None:
             changed = np.flatnonzero(forces != last[0])
             if changed.size < 0.2 * forces.size:
-                product = last[1] + self.space.W[changed].T @ (forces[changed] - last[0][changed])
+                product = last[1] + self.space.compliance_of_change(changed, forces[changed] - last[0][changed])
                 self._last_compliance = (forces, product)
                 return product
-        product = self.space.W @ forces
+        product = self.space.compliance(forces)
         self._last_compliance = (forces, product)
         return product
 

@@ -221,6 +221,26 @@ class ContactSpace:
         return self.W.shape[0]
 
     @property
+    def stiffness_scale(self) -> float:
+        """The largest diagonal stiffness of the condensed bodies, N/mm (a scale for tolerances)."""
+        return float(np.abs(np.diag(self.structure.stiffness)).max())
+
+    def compliance(self, forces: np.ndarray) -> np.ndarray:
+        """W·λ (mm) for nodal contact forces λ (N)."""
+        return self.W @ forces
+
+    def compliance_of_change(self, rows: np.ndarray, change: np.ndarray) -> np.ndarray:
+        """W·Δλ (mm) for a change Δλ (N) on ``rows`` only (W is symmetric: its rows are read)."""
+        return self.W[rows].T @ change
+
+    def linear_solver(self, settings=None):
+        """The solver of this space's Newton corrections (:class:`contact.linear.NewtonLinearSolver`)."""
+        # contact.linear imports this module
+        from contact.linear import KrylovSettings, NewtonLinearSolver
+
+        return NewtonLinearSolver(self, KrylovSettings() if settings is None else settings)
+
+    @property
     def n_control(self) -> int:
         return self.control_dofs.size
 

@@ -24,13 +24,12 @@ from pathlib import Path
 
 import numpy as np
 import skfem
-from skfem.models.elasticity import lame_parameters, linear_elasticity
 
 from contact.assembly import Body, ReferencePoint
 from contact.law import ContactLaw, ContactState
 from contact.solver import Effects
 from reduction.mesh.generators import flat_block
-from reduction.elasticity import ElasticBody
+from reduction.elasticity import ElasticBody, assemble_elastic_body
 
 
 @dataclass(frozen=True)
@@ -57,16 +56,11 @@ class FlatOnFlat:
 
 
 def box_body(mesh: skfem.MeshHex, youngs_modulus: float, poisson_ratio: float) -> ElasticBody:
-    """Elastic body of a mesh of rectangular boxes (MPa), 2×2×2 Gauss points per hexahedron.
-
-    The same stiffness as :func:`reduction.elasticity.assemble_elastic_body` (exact for boxes;
-    agrees to round-off) but assembled 10× faster than with its default 4×4×4 rule, which
-    matters at 3,600 contact points (two bodies of 20,000 hexahedra).
-    """
-    basis = skfem.Basis(mesh, skfem.ElementVector(skfem.ElementHex1()), intorder=3)
-    stiffness = linear_elasticity(*lame_parameters(youngs_modulus, poisson_ratio)).assemble(basis).tocsr()
-    return ElasticBody(mesh=mesh, basis=basis, dim=3, stiffness=stiffness, mass=None,
-                       node_dofs=basis.nodal_dofs.T.astype(np.int64))
+    """Elastic body of a mesh of boxes (MPa): :func:`reduction.elasticity.assemble_elastic_body`
+    (2×2×2 Gauss points per hexahedron, assembled in element blocks; the body keeps one
+    element's quadrature data only, which matters at 10,000 contact points: two bodies of
+    60,000 hexahedra, whose full quadrature data would take 2 GB)."""
+    return assemble_elastic_body(mesh, youngs_modulus, poisson_ratio)
 
 
 def flat_on_flat(points_per_side: int, *, size: float = 10.0, height: float = 5.0,
@@ -135,6 +129,8 @@ class RunRecord:
             "cycle_s": float(times.sum()),
             "increment_mean_cpu_s": float(cpu_times.mean()), "cycle_cpu_s": float(cpu_times.sum()),
             "history_s": float(np.sum(self.increment_times)),
+            "history_cpu_s": float(np.sum(self.increment_cpu_times)),
+            "history_max_cpu_s": float(np.max(self.increment_cpu_times)),
             "newton_mean": float(iterations.mean()),
             "newton_max": int(np.max(self.max_iterations[cycle])),
             "newton_max_history": int(np.max(self.max_iterations)),
@@ -170,11 +166,15 @@ def drive(solver, state: ContactState, case: FlatOnFlat, *, label: str, points: 
 
 def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> tuple[dict, dict]:
     """Set up and run the case with the ``condensed``, ``dense`` (condensed, exact dense LU in
-    every Newton iteration) or ``full`` solver: (summary, fields).
+    every Newton iteration), ``sparse`` (:mod:`contact.sparse`: bodies kept sparse, no dense W),
+    ``auto`` (``sparse`` or ``condensed`` by :func:`contact.sparse.choose_path`) or ``full``
+    solver: (summary, fields).
 
     setup_s is the condensation (assemble, split into condense_s: coupling and Schur
     complements of the bodies, and contact_space_s: the elimination to W, E, S_q) or the
-    full-model build. peak_rss_mb is the process's peak resident memory, meaningful when each run has
+    full-model build (setup_cpu_s: its CPU time). peak_rss_mb is the process's peak resident
+    memory from set-up on (the case's meshes and bodies included, the transient of building
+    them not: Linux), process_peak_rss_mb over the whole process; meaningful when each run has
     its own process (as in :func:`main`).
     """
     from contact import full_model
@@ -183,8 +183,13 @@ def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> t
     from contact.solver import ContactSolver, NewtonSettings
     from contact.structure import ContactSpace
 
+    from contact.sparse import choose_path
+
     case = flat_on_flat(points_per_side, increments_per_quarter=increments_per_quarter)
-    start = time.perf_counter()
+    _reset_peak_memory()  # the solver's peak, not the transient of building the meshes
+    if solver == "auto":  # what a run would choose: the dense W below the measured threshold
+        solver = "sparse" if choose_path(points_per_side**2, 3) == "sparse" else "condensed"
+    start, start_cpu = time.perf_counter(), time.process_time()
     split = {}
     if solver in ("condensed", "dense"):
         structure = assemble(case.bodies, case.slave, case.master, loads=case.loads,
@@ -196,20 +201,49 @@ def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> t
         engine = ContactSolver(ContactSpace(structure), case.law, NewtonSettings(linear=linear))
         dofs = structure.n_dofs
         split["contact_space_s"] = time.perf_counter() - start - split["condense_s"]
+    elif solver == "sparse":
+        from contact.sparse import SparseContactSpace
+
+        model = full_model.build(case.bodies, case.slave, case.master, loads=case.loads,
+                                 motions=case.motions)
+        split["condense_s"] = time.perf_counter() - start
+        engine, dofs = ContactSolver(SparseContactSpace(model), case.law), model.n_dofs
+        split["contact_space_s"] = time.perf_counter() - start - split["condense_s"]
     elif solver == "full":
         model = full_model.build(case.bodies, case.slave, case.master, loads=case.loads,
                                  motions=case.motions)
         engine, dofs = full_model.FullModelSolver(model, case.law), model.n_dofs
     else:
-        raise ValueError(f"solver must be 'condensed', 'dense' or 'full', got {solver!r}")
+        raise ValueError(f"solver must be 'condensed', 'dense', 'sparse', 'auto' or 'full', got {solver!r}")
     setup = time.perf_counter() - start
+    split["setup_cpu_s"] = time.process_time() - start_cpu
     record, fields = drive(engine, case.initial_state(engine.n_points), case, label=solver,
                            points=engine.n_points, dofs=dofs, setup_time=setup)
     summary = record.summary(case.cycle) | split
-    summary["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    summary["process_peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    summary["peak_rss_mb"] = _peak_memory_mb() or summary["process_peak_rss_mb"]
     if solver != "full":
         summary["linear"] = dict(vars(engine.linear.counters))
+        summary["linear_solver"] = engine.linear.description()
     return summary, fields
+
+
+def _reset_peak_memory() -> None:
+    """Reset the process's peak resident memory (Linux: /proc/self/clear_refs), if possible."""
+    try:
+        Path("/proc/self/clear_refs").write_text("5")
+    except OSError:
+        pass
+
+
+def _peak_memory_mb() -> float | None:
+    """Peak resident memory (MB) since the last reset (Linux VmHWM), or None."""
+    try:
+        status = Path("/proc/self/status").read_text().splitlines()
+    except OSError:
+        return None
+    peak = [line.split()[1] for line in status if line.startswith("VmHWM:")]
+    return float(peak[0]) / 1024.0 if peak else None
 
 
 def relative_difference(reference: dict, other: dict) -> float:
@@ -245,7 +279,7 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = argparse.ArgumentParser(description=main.__doc__)
     parser.add_argument("points_per_side", type=int)
-    parser.add_argument("solver", choices=("condensed", "dense", "full"))
+    parser.add_argument("solver", choices=("condensed", "dense", "sparse", "auto", "full"))
     parser.add_argument("fields", type=Path, help="where to write the final per-point fields (.npz)")
     parser.add_argument("--increments-per-quarter", type=int, default=4)
     args = parser.parse_args(argv)

@@ -1,0 +1,365 @@
+"""Contact space of sparse bodies: the interface solved without ever forming a dense W.
+
+The dense path (:class:`contact.structure.ContactSpace`) condenses every body onto its
+surface and forms the contact compliance W = G·K⁻¹·Gᵀ: both grow as n² (10,000 points in 3D:
+a 60,000² condensed stiffness and a 30,000² W, 29 GB and 7 GB). Here the bodies keep their
+interior, sparse, in the numbering of :func:`contact.full_model.build`. The free DOFs split
+into the control DOFs q (reference points that no contact row touches) and all others, a
+(interior and contact surfaces). The contact-space equations of the dense path are the same,
+
+    g − g_f + E·q + W·λ(g) = 0,       S_q·q − Eᵀ·λ(g) − f_q = 0,
+
+with W·λ = G·K_aa⁻¹·Gᵀ·λ evaluated by one solve with a sparse Cholesky factor of K_aa
+(formed once), and E = G·K_aa⁻¹·K_aq, S_q = K_qq − K_qa·K_aa⁻¹·K_aq formed with one solve
+per control DOF. So the solver's residuals, line search and convergence test are those of
+the dense path, and so are its answers.
+
+A Newton correction solves J·[x, y] = [b, c] with J = [[I + W·B, E], [−Eᵀ·B, S_q]] (B the
+block-diagonal tangent A·D of :mod:`contact.linear`). Writing x = b + G·w, it is exactly the
+sparse system of the uncondensed tangent (the full model's Newton matrix):
+
+    [[K_aa + Gᵀ·B·G, K_aq], [K_qa, K_qq]]·[w, y] = [−Gᵀ·B·b, c].
+
+That matrix changes with the tangent; it is solved by GMRES preconditioned with a sparse
+Cholesky factor (MKL PARDISO, single precision) of K + Gᵀ·B₀·G, B₀ the diagonal of an earlier
+tangent: symmetric positive definite, half the memory of an LU, and as good a preconditioner
+as the LU of the earlier tangent itself (measured: the same Krylov iterations within 1 %).
+It is kept across Newton iterations and increments and rebuilt when the Krylov work lost
+to its age exceeds what the rebuild costs (counted in the factor's flops, not in seconds:
+the results do not depend on the machine's load). Memory and time grow with the sparse factors, about n·log n for these quasi-2D
+interface bodies, not n².
+
+Units: mm, N, N/mm.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from contact.full_model import FullModel, TangentAssembler
+from contact.linear import KrylovCounters, KrylovSettings, _gmres
+from reduction import pardiso
+from reduction.factorization import factorize
+from reduction.threads import single_threaded_blas
+
+#: contact points from which the sparse path is chosen (3D), set by memory, measured with
+#: the flat-on-flat benchmark (tests/bench/test_bench_scale.py): the dense path's set-up needs
+#: 11.5 GB at 3,600 points, growing as n², so 6 GB (the target of issue 14) at ~2,600; the
+#: sparse one needs 1.1 GB at 1,600 points and 2.7 GB at 3,600. In time the dense path is
+#: ahead there (1,600 points: 0.12 s of CPU per increment against 0.55 s), its
+#: per-increment cost growing as n² against about n for the sparse one.
+SPARSE_FROM_POINTS = 2500
+
+
+#: how many times faster per flop a factorisation runs than a solve (dense BLAS3 blocks
+#: against a memory-bound substitution): the rebuild's work in solve flops is its flops over
+#: this. Measured at 900 points (PARDISO, one thread): 1 rebuilds too late (the first
+#: reference, from the contact search, is kept too long: 480 Krylov iterations in the
+#: history, 0.31 s per increment), 3 gives 301 and 0.27 s, 10 rebuilds too often (0.33 s).
+FACTOR_FLOP_RATE = 3.0
+
+
+def choose_path(n_points: int, dim: int) -> str:
+    """"dense" or "sparse" for an interface of ``n_points`` contact points in ``dim`` D."""
+    return "sparse" if dim == 3 and n_points >= SPARSE_FROM_POINTS else "dense"
+
+
+def contact_space(bodies: list, slave: tuple, master: tuple, *, loads: dict | None = None,
+                  motions: dict | None = None, path: str = "auto"):
+    """The contact space of bodies and a surface pair (the arguments of
+    :func:`contact.assembly.assemble`) on the ``path`` "dense" (condensed bodies, dense W),
+    "sparse" (this module) or "auto" (:func:`choose_path` by the slave surface's node count,
+    one contact point per node). Returns (space, path taken)."""
+    from contact.assembly import assemble
+    from contact.full_model import build
+    from contact.interface import surface_from_facets
+    from contact.structure import ContactSpace
+    from reduction.errors import InputError
+
+    if path not in ("auto", "dense", "sparse"):
+        raise InputError(f"contact path must be auto, dense or sparse, got {path!r}")
+    if path == "auto":
+        body = next((b for b in bodies if b.name == slave[0]), None)
+        if body is None:
+            raise InputError(f"slave surface names body {slave[0]!r}, which is not defined")
+        surface = surface_from_facets(body.elastic.mesh, slave[1], f"{slave[0]} surface")
+        path = choose_path(surface.nodes.size, body.elastic.dim)
+    if path == "sparse":
+        return SparseContactSpace(build(bodies, slave, master, loads=loads, motions=motions)), path
+    return ContactSpace(assemble(bodies, slave, master, loads=loads, motions=motions).structure), path
+
+
+@dataclass(frozen=True)
+class SparseInterface:
+    """What the solver reads of an interface's structure (the :class:`contact.structure.Structure`
+    fields it uses): dim, area (n_points,) mm², initial_overclosure (n_points,) mm and the
+    pattern names (loads, then motions)."""
+
+    dim: int
+    area: np.ndarray
+    initial_overclosure: np.ndarray
+    patterns: tuple
+
+    @property
+    def n_points(self) -> int:
+        return self.area.size
+
+
+class SparseContactSpace:
+    """Contact-space operators of a :class:`contact.full_model.FullModel`, W kept implicit.
+
+    The interface of :class:`contact.structure.ContactSpace` that the Newton solver uses:
+    E (n_rows, n_control) mm/mm, S_q (n_control, n_control) N/mm, ``driving``,
+    ``compliance`` (W·λ) and ``linear_solver``.
+    """
+
+    def __init__(self, model: FullModel):
+        with single_threaded_blas():
+            self._eliminate(model)
+
+    def _eliminate(self, model: FullModel) -> None:
+        self.model = model
+        self.structure = SparseInterface(model.dim, model.area, model.initial_overclosure, model.patterns)
+        K = model.stiffness.tocsr()
+        G = model.contact_operator.tocsr()
+        n = K.shape[0]
+        touched = np.zeros(n, dtype=bool)
+        touched[np.unique(G.indices)] = True
+        labelled = np.array(sorted(i for kind, i in model.labels.values() if kind == "free"), dtype=int)
+        q = labelled[~touched[labelled]]
+        a = np.setdiff1d(np.arange(n), q)
+        self.control_dofs, self.other_dofs = q, a
+        K_aa = K[a][:, a].tocsr()
+        self._K_aq = K[a][:, q].toarray()
+        self._K_qq = K[q][:, q].toarray()
+        self.Gc = G[:, a].tocsr()
+        self._GcT = self.Gc.T.tocsr()
+        self._Kaa = factorize(K_aa, label="stiffness of the bodies with their control points held")
+        compliance_Kaq = self._Kaa.solve(self._K_aq) if q.size else np.zeros((a.size, 0))
+        self.E = np.asarray(self.Gc @ compliance_Kaq)
+        self.Sq = self._K_qq - self._K_aq.T @ compliance_Kaq
+        self.control_stiffness = np.zeros((q.size, q.size))
+        # Each pattern, at unit amplitude, as a contact-space load: g_f and f_q columns.
+        Kp = model.prescribed_stiffness.tocsr()
+        motion = model.pattern_motion
+        effective_a = model.pattern_force[a] - Kp[a] @ motion
+        compliance_f = self._Kaa.solve(effective_a) if effective_a.shape[1] else effective_a
+        self.pattern_gf = np.asarray(self.Gc @ compliance_f)
+        self.pattern_fq = model.pattern_force[q] - Kp[q] @ motion - self._K_aq.T @ compliance_f
+        self.pattern_motion = motion
+        # the uncondensed tangent in the order [a, q]: K + Gᵀ·B·G, on one sparsity pattern
+        order = np.concatenate([a, q])
+        self._stiffness_aq = K[order][:, order].tocsr()
+        self._G_aq = sp.hstack([self.Gc, sp.csr_matrix((G.shape[0], q.size))], format="csr")
+        self.stiffness_scale = float(np.abs(K.diagonal()).max())  # N/mm
+
+    @property
+    def n_rows(self) -> int:
+        return self.Gc.shape[0]
+
+    @property
+    def n_control(self) -> int:
+        return self.control_dofs.size
+
+    def with_control_stiffness(self, extra: np.ndarray) -> SparseContactSpace:
+        raise NotImplementedError("locked bolts are not supported on the sparse path yet")
+
+    def driving(self, amplitudes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """g_f (mm) and f_q (N) for a vector of pattern amplitudes."""
+        return self.pattern_gf @ amplitudes, self.pattern_fq @ amplitudes
+
+    def compliance(self, forces: np.ndarray) -> np.ndarray:
+        """W·λ (mm) for nodal contact forces λ (N): one solve with the bodies' sparse factor."""
+        return np.asarray(self.Gc @ self._Kaa.solve(self._GcT @ forces))
+
+    def compliance_of_change(self, rows: np.ndarray, change: np.ndarray) -> np.ndarray:
+        """W·Δλ (mm) for a change Δλ (N) on ``rows`` only."""
+        forces = np.zeros(self.n_rows)
+        forces[rows] = change
+        return self.compliance(forces)
+
+    def linear_solver(self, settings: KrylovSettings | None = None) -> SparseNewtonSolver:
+        """The solver of this space's Newton corrections."""
+        return SparseNewtonSolver(self, settings)
+
+
+class SparseNewtonSolver:
+    """Newton corrections of a :class:`SparseContactSpace` (the interface of
+    :class:`contact.linear.NewtonLinearSolver`): GMRES on the uncondensed tangent,
+    preconditioned by a PARDISO factor of an earlier one.
+
+    reference: "diagonal" (the default: Cholesky of K + Gᵀ·diag(B)·G, B the tangent blocks
+    clipped at zero) or "tangent" (LU of the earlier tangent itself).
+
+    settings: relative_tolerance / final_tolerance bound the residual of the sparse system
+    relative to its right-hand side; fresh_iterations, max_iterations and single_precision (of
+    the preconditioner's factor) as in :class:`contact.linear.KrylovSettings` (direct_below
+    does not apply: the dense path is the one for small interfaces, see :func:`choose_path`).
+    """
+
+    def __init__(self, space: SparseContactSpace, settings: KrylovSettings | None = None,
+                 reference: str = "diagonal"):
+        self.space = space
+        self.settings = KrylovSettings() if settings is None else settings
+        self.counters = KrylovCounters()
+        self._assembler = TangentAssembler(space._stiffness_aq, space._G_aq, space.structure.dim)
+        pattern = self._assembler.matrix(np.zeros((space.structure.n_points, space.structure.dim,
+                                                   space.structure.dim)))
+        self._upper = np.flatnonzero(np.repeat(np.arange(pattern.shape[0]), np.diff(pattern.indptr))
+                                     <= pattern.indices)
+        self.reference = reference
+        self._factor = None
+        self._stale = True
+        self._lost_work = 0.0
+        self._rebuild_work = 0.0
+
+    def description(self) -> str:
+        """Which path solves this interface's Newton systems, in words (for run summaries)."""
+        precision = "single" if self.settings.single_precision else "double"
+        return (f"sparse bodies ({self.space.model.n_dofs} DOFs, no dense W): GMRES on the uncondensed "
+                f"tangent preconditioned by a {precision}-precision PARDISO factor of an earlier one "
+                f"({self.reference}); "
+                "W·λ by a sparse Cholesky solve")
+
+    def solve(self, blocks: np.ndarray, r_kin: np.ndarray, r_ctl: np.ndarray,
+              final: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Newton correction (Δg mm, Δq mm) for residuals r_kin (mm) and r_ctl (N)."""
+        space = self.space
+        matrix = self._assembler.matrix(blocks)
+        b = -r_kin
+        tangent_b = np.matmul(blocks, b.reshape(-1, blocks.shape[1], 1)).reshape(-1)
+        rhs = np.concatenate([-(space._GcT @ tangent_b), -r_ctl])
+        tolerance = self.settings.final_tolerance if final else self.settings.relative_tolerance
+        if self._stale or self._factor is None:
+            self._refactor(blocks)
+        solution, iterations = _gmres(lambda x: matrix @ x, self._precondition, rhs, tolerance,
+                                      self.settings.max_iterations)
+        if solution is None:
+            self._refactor(blocks)
+            solution, more = _gmres(lambda x: matrix @ x, self._precondition, rhs, tolerance,
+                                    self.settings.max_iterations)
+            iterations += more
+            if solution is None:
+                raise np.linalg.LinAlgError("GMRES did not converge with a fresh preconditioner")
+        self._lost_work += max(iterations - self.settings.fresh_iterations, 0) * self._solve_work
+        self._stale = self._lost_work > self._rebuild_work
+        self.counters.solves += 1
+        self.counters.krylov_iterations += iterations
+        n_a = space.other_dofs.size
+        return b + space.Gc @ solution[:n_a], solution[n_a:]
+
+    def _refactor(self, blocks: np.ndarray) -> None:
+        if self.reference == "diagonal":
+            # K + Gᵀ·B₀·G with B₀ the diagonal of the tangent, clipped at zero: symmetric
+            # positive definite (a Cholesky factor, half an LU), and it does not age with the
+            # normal-tangential coupling dτ/dh, which changes sign with the slip direction.
+            dim = blocks.shape[1]
+            diagonal = np.zeros_like(blocks)
+            diagonal[:, np.arange(dim), np.arange(dim)] = np.maximum(np.diagonal(blocks, axis1=1, axis2=2), 0.0)
+            matrix = self._assembler.matrix(diagonal)
+            upper = sp.csr_matrix((matrix.data[self._upper], matrix.indices[self._upper],
+                                   np.concatenate([[0], np.cumsum(np.bincount(
+                                       np.repeat(np.arange(matrix.shape[0]), np.diff(matrix.indptr))[self._upper],
+                                       minlength=matrix.shape[0]))])), shape=matrix.shape)
+            if self._factor is None:
+                self._factor = _SparseLU(upper, self.settings.single_precision, mtype=2)
+            self._factor.factorise(upper)
+        else:
+            matrix = self._assembler.matrix(blocks)
+            if self._factor is None:
+                self._factor = _SparseLU(matrix, self.settings.single_precision)
+            self._factor.factorise(matrix)
+        self._solve_work = self._factor.solve_flops
+        self._rebuild_work = self._factor.factor_flops / FACTOR_FLOP_RATE
+        self._lost_work = 0.0
+        self._stale = False
+        self.counters.factorisations += 1
+
+    def _precondition(self, vector: np.ndarray) -> np.ndarray:
+        return self._factor.solve(vector)
+
+
+class _SparseLU:
+    """MKL PARDISO factor of matrices on one sparsity pattern: the ordering and symbolic
+    analysis once, then a numeric factorisation per :meth:`factorise`. mtype 11: LU of a real
+    unsymmetric matrix; 2: Cholesky of a symmetric positive definite one, given by its upper
+    triangle.
+
+    single: factorise and solve in single precision (half the memory and memory traffic of
+    the factor; a preconditioner needs no more than its 1e-7 relative accuracy).
+    factor_flops and solve_flops: the work of one factorisation (as PARDISO reports it) and of
+    one solve (4 flops per factor entry: forward and backward substitution)."""
+
+    def __init__(self, pattern: sp.csr_matrix, single: bool = True, mtype: int = 11):
+        self._MTYPE = mtype  # 11 real unsymmetric, 2 symmetric positive definite (upper triangle)
+        if not pardiso.available():
+            raise RuntimeError("the sparse contact path needs MKL PARDISO (pip install pypardiso)")
+        pattern.sort_indices()
+        self.n = pattern.shape[0]
+        self.row_start = pattern.indptr.astype(np.int32)
+        self.columns = pattern.indices.astype(np.int32)
+        self.state = np.zeros(64, dtype=np.int64)
+        self.iparm = np.zeros(64, dtype=np.int32)
+        self.iparm[0] = 1  # own settings below
+        self.iparm[1] = 2  # METIS nested dissection ordering
+        self.iparm[9] = 13  # pivot perturbation 1e-13
+        self.iparm[10] = int(mtype == 11)  # scaling and ...
+        self.iparm[12] = int(mtype == 11)  # ... weighted matching, the defaults for unsymmetric matrices
+        self.iparm[17] = -1  # report the factor's nonzeros ...
+        self.iparm[18] = -1  # ... and its Mflops
+        self.iparm[27] = int(single)  # a, b and x in single precision
+        self.iparm[34] = 1  # zero-based indices
+        self.dtype = np.float32 if single else np.float64
+        self.values = np.ascontiguousarray(pattern.data, dtype=self.dtype)
+        self._finalizer = weakref.finalize(self, _release, self.state, self.iparm, self._MTYPE)
+        self._call(11, np.zeros(self.n, self.dtype), np.zeros(self.n, self.dtype))
+        self.factor_flops = 1e6 * float(self.iparm[18])
+        self.solve_flops = 4.0 * float(self.iparm[17])
+
+    def factorise(self, matrix: sp.csr_matrix) -> None:
+        """Numeric LU of ``matrix`` (same sparsity pattern as the one analysed)."""
+        self.values = np.ascontiguousarray(matrix.data, dtype=self.dtype)
+        self._call(22, np.zeros(self.n, self.dtype), np.zeros(self.n, self.dtype))
+        self.factor_flops = 1e6 * float(self.iparm[18])
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        rhs = np.ascontiguousarray(rhs, dtype=self.dtype)
+        out = np.zeros_like(rhs)
+        self._call(33, rhs, out)
+        return out.astype(np.float64, copy=False)
+
+    def _call(self, phase: int, rhs: np.ndarray, out: np.ndarray) -> None:
+        error = ctypes.c_int32(0)
+        integer = ctypes.POINTER(ctypes.c_int32)
+        pardiso._library()(
+            self.state.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)), ctypes.byref(ctypes.c_int32(1)),
+            ctypes.byref(ctypes.c_int32(1)), ctypes.byref(ctypes.c_int32(self._MTYPE)),
+            ctypes.byref(ctypes.c_int32(phase)), ctypes.byref(ctypes.c_int32(self.n)),
+            self.values.ctypes.data_as(ctypes.c_void_p),
+            self.row_start.ctypes.data_as(integer), self.columns.ctypes.data_as(integer),
+            np.zeros(1, dtype=np.int32).ctypes.data_as(integer), ctypes.byref(ctypes.c_int32(1)),
+            self.iparm.ctypes.data_as(integer), ctypes.byref(ctypes.c_int32(0)),
+            rhs.ctypes.data_as(ctypes.c_void_p), out.ctypes.data_as(ctypes.c_void_p), ctypes.byref(error))
+        if error.value != 0:
+            raise np.linalg.LinAlgError(f"MKL PARDISO failed on the contact tangent (error {error.value})")
+
+
+def _release(state: np.ndarray, iparm: np.ndarray, mtype: int) -> None:
+    """Free PARDISO's memory of one handle (phase −1)."""
+    if not state.any():
+        return
+    integer = ctypes.POINTER(ctypes.c_int32)
+    dummy, index = np.zeros(1), np.zeros(1, dtype=np.int32)
+    pardiso._library()(
+        state.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)), ctypes.byref(ctypes.c_int32(1)),
+        ctypes.byref(ctypes.c_int32(1)), ctypes.byref(ctypes.c_int32(mtype)), ctypes.byref(ctypes.c_int32(-1)),
+        ctypes.byref(ctypes.c_int32(1)), dummy.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+        index.ctypes.data_as(integer), index.ctypes.data_as(integer), index.ctypes.data_as(integer),
+        ctypes.byref(ctypes.c_int32(1)), iparm.ctypes.data_as(integer), ctypes.byref(ctypes.c_int32(0)),
+        dummy.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), dummy.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+        ctypes.byref(ctypes.c_int32(0)))
