@@ -157,7 +157,7 @@ def _check_geometry(mesh, loading: MultibodyLoading) -> None:
                          "in its frame (contact face y = 0): give both the same geometry ([mbs.counterweight])")
 
 
-def coupled_patterns(scene: Scene, body, mesh, loading: MultibodyLoading) -> tuple[dict, "SharedCondenser | None"]:
+def coupled_patterns(scene: Scene, body, mesh, loading: MultibodyLoading) -> tuple[dict, SharedCondenser | None]:
     """The CW's unit inertia patterns (N per unit history value) that the scene's effects call
     for, and, for the wing-mode field, the condenser that condenses the body with the same
     factorisation that normalised the wing mode (:class:`SharedCondenser`; None otherwise).

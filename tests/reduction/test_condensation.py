@@ -209,7 +209,7 @@ def test_shared_factor_equals_the_two_factor_path(solver):
 def test_shared_factor_needs_the_coupled_nodes_on_its_boundary():
     from reduction.condensation import boundary_schur, condense_from_boundary
 
-    body, face, pads, heads, coupling, loads = _small_counterweight()
+    body, face, pads, _, coupling, _ = _small_counterweight()
     schur = boundary_schur(body.stiffness, body.node_dofs[face].ravel(), solver="splu")
     retained = coupling.kept[body.node_dofs[pads].ravel()]
     with pytest.raises(InputError, match="coupled node"):

@@ -8,10 +8,10 @@ from reduction.errors import InputError
 from reduction.mesh.generators import counterweight_block, grid_lines, web_block
 
 # a small CW–web joint (mm): the shipped layout scaled down, so that a 2.5 mm mesh is quick
-CW = dict(width=300.0, height=80.0, thickness=30.0, hub_width=140.0, hub_height=15.0, screw_x=50.0,
-          hole_half_size=8.0)
-WEB = dict(width=160.0, depth=40.0, thickness=30.0, hub_width=140.0, screw_x=50.0, hole_half_size=8.0,
-           hole_depth=25.0)
+CW = {"width": 300.0, "height": 80.0, "thickness": 30.0, "hub_width": 140.0, "hub_height": 15.0,
+      "screw_x": 50.0, "hole_half_size": 8.0}
+WEB = {"width": 160.0, "depth": 40.0, "thickness": 30.0, "hub_width": 140.0, "screw_x": 50.0,
+       "hole_half_size": 8.0, "hole_depth": 25.0}
 RELIEF = 30.0  # the pads are 30 ≤ |x| ≤ 70 on the hub face y = 0
 
 
