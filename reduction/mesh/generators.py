@@ -7,10 +7,13 @@ Cattaneo-Mindlin) are resolved without paying for a uniformly fine body.
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 import numpy as np
 import skfem
 
 from reduction.errors import InputError
+from reduction.mesh.layers import layered_block
 
 
 def graded_coordinates(fine_half_width: float, fine_size: float, total_half_width: float,
@@ -290,9 +293,10 @@ def _far_size(contact_size: float, coarse_size: float | None) -> float:
 
 
 def _hub_lines(width: float, hub_width: float, screw_x: float, hole_half_size: float,
-               relief_half_width: float, contact_size: float, coarse: float) -> np.ndarray:
+               relief_half_width: float, contact_size: float, coarse: float):
     """x lines of the CW–web joint: fine on the hub face, or only on its two pads
-    relief_half_width ≤ |x| ≤ hub_width/2 when the central relief is given (> 0)."""
+    relief_half_width ≤ |x| ≤ hub_width/2 when the central relief is given (> 0); with the
+    breaks they keep and their fine intervals: (lines, breaks, fine intervals)."""
     half_hub = 0.5 * hub_width
     if not 0.0 <= relief_half_width < screw_x - hole_half_size:
         raise InputError("relief_half_width must be >= 0 and leave the screw holes on the pads "
@@ -301,7 +305,47 @@ def _hub_lines(width: float, hub_width: float, screw_x: float, hole_half_size: f
     fine = [(-half_hub, half_hub)]
     if relief_half_width > 0:
         fine = [(-half_hub, -relief_half_width), (relief_half_width, half_hub)]
-    return grid_lines(-0.5 * width, 0.5 * width, holes_x + [-half_hub, half_hub], fine, contact_size, coarse)
+    breaks = holes_x + [-half_hub, half_hub, -0.5 * width, 0.5 * width] + [end for interval in fine for end in interval]
+    return grid_lines(-0.5 * width, 0.5 * width, holes_x + [-half_hub, half_hub], fine, contact_size, coarse), \
+        breaks, fine
+
+
+def _transition_plan(size: float, coarse: float, room: float):
+    """Layers from the contact face (depth 0 … ``room`` mm): two of ``size``, then rounds of an x
+    and a z transition (:mod:`reduction.mesh.layers`), each 2·(cell size) thick, tripling the cell
+    size while it stays ≤ ``coarse`` and the rounds fit in ``room``. Returns (plan, depth
+    reached, cell size reached), or None when no round fits or the far size is at most 4 × the
+    contact size (the tensor grid is kept: the shipped 10 mm meshes are unchanged)."""
+    if coarse <= 4.0 * size + 1e-9:
+        return None
+    plan, depth, cell = [("regular", 0.0, size), ("regular", size, 2.0 * size)], 2.0 * size, size
+    while 3.0 * cell <= coarse + 1e-9 and depth + 4.0 * cell <= room + 1e-9:
+        plan += [("x", depth, depth + 2.0 * cell), ("z", depth + 2.0 * cell, depth + 4.0 * cell)]
+        depth, cell = depth + 4.0 * cell, 3.0 * cell
+    return None if len(plan) == 2 else (plan, depth, cell)
+
+
+def _graded_layers(depth: float, stops, cell: float, coarse: float) -> list:
+    """Regular layers from ``depth`` through every depth of ``stops`` (ascending, the last the
+    block's end), their thickness growing ×1.3 from ``cell`` up to ``coarse`` in each stretch."""
+    layers = []
+    for stop in stops:
+        if stop <= depth + 1e-9:
+            continue
+        edges = depth + np.concatenate([[0.0], np.cumsum(_graded_sizes(stop - depth, cell, coarse, 1.3))])
+        edges[-1] = stop
+        layers += [("regular", a, b) for a, b in pairwise(edges)]
+        depth = stop
+    return layers
+
+
+def _layered(x, z, plan, keep_x, keep_z, fine_x, fine_z, solids, voids, mirror: bool) -> skfem.MeshHex:
+    """The layered mesh (y = depth, or y = −depth with ``mirror``) cut to the solids minus voids."""
+    mesh = layered_block(x, z, plan, keep_x, keep_z, fine_x, fine_z)
+    if mirror:  # y → −y, and the corner order with it (swap the two y faces) to keep volumes positive
+        mesh = skfem.MeshHex(mesh.p * np.array([[1.0], [-1.0], [1.0]]), np.ascontiguousarray(mesh.t[[1, 0, 4, 5, 2, 3, 7, 6]]))
+    keep = cells_inside(mesh, solids) & ~cells_inside(mesh, voids)
+    return mesh.remove_elements(np.flatnonzero(~keep))
 
 
 def counterweight_block(width: float, height: float, thickness: float, hub_width: float, hub_height: float,
@@ -312,9 +356,10 @@ def counterweight_block(width: float, height: float, thickness: float, hub_width
     height, thickness along z; square through holes (half-size ``hole_half_size``) for two
     screws at x = ±screw_x. Element size ``contact_size`` on the hub face (on its pads
     |x| ≥ relief_half_width when that is > 0) and in the two layers under it, graded to
-    ``coarse_size`` (:func:`_far_size`) away from them. A tensor grid (conforming hexahedra, no
-    hanging nodes): the fine x and z lines run through the whole body, which is what bounds the
-    saving (see :func:`grid_lines`). All lengths mm.
+    ``coarse_size`` (:func:`_far_size`) away from them: in y by growing layers, in x and z by
+    3:1 transition layers in the hub (:mod:`reduction.mesh.layers`, conforming hexahedra, no
+    hanging nodes) when the far size exceeds 4 × contact_size; otherwise a tensor grid (the
+    shipped 10 mm mesh). All lengths mm.
     """
     if not (0 < hub_width < width and 0 < hub_height < height and
             hole_half_size < screw_x < 0.5 * hub_width - hole_half_size and 2 * hole_half_size < thickness):
@@ -322,12 +367,19 @@ def counterweight_block(width: float, height: float, thickness: float, hub_width
                          "holes inside the hub face (hole_half_size < screw_x < hub_width/2 − hole_half_size)")
     coarse = _far_size(contact_size, coarse_size)
     half_t = 0.5 * thickness
-    x = _hub_lines(width, hub_width, screw_x, hole_half_size, relief_half_width, contact_size, coarse)
-    y = grid_lines(0.0, height, [hub_height], (0.0, min(2.0 * contact_size, hub_height)), contact_size, coarse)
+    x, keep_x, fine_x = _hub_lines(width, hub_width, screw_x, hole_half_size, relief_half_width, contact_size, coarse)
     z = grid_lines(-half_t, half_t, [-hole_half_size, hole_half_size], (-half_t, half_t), contact_size, coarse)
     voids = [((s * screw_x - hole_half_size, -1.0, -hole_half_size),
               (s * screw_x + hole_half_size, height + 1.0, hole_half_size)) for s in (-1, 1)]
-    return union_of_boxes(x, y, z, counterweight_solids(width, height, thickness, hub_width, hub_height), voids)
+    solids = counterweight_solids(width, height, thickness, hub_width, hub_height)
+    transitions = _transition_plan(contact_size, coarse, hub_height)
+    if transitions is None:
+        y = grid_lines(0.0, height, [hub_height], (0.0, min(2.0 * contact_size, hub_height)), contact_size, coarse)
+        return union_of_boxes(x, y, z, solids, voids)
+    plan, depth, cell = transitions
+    plan += _graded_layers(depth, [hub_height, height], cell, coarse)
+    keep_z = [-half_t, -hole_half_size, hole_half_size, half_t]
+    return _layered(x, z, plan, keep_x, keep_z, fine_x, [(-half_t, half_t)], solids, voids, mirror=False)
 
 
 def web_block(width: float, depth: float, thickness: float, hub_width: float, screw_x: float,
@@ -341,10 +393,16 @@ def web_block(width: float, depth: float, thickness: float, hub_width: float, sc
         raise InputError("web_block: needs hub_width <= width and hole_depth < depth")
     coarse = _far_size(contact_size, coarse_size)
     half_t = 0.5 * thickness
-    x = _hub_lines(width, hub_width, screw_x, hole_half_size, relief_half_width, contact_size, coarse)
-    y = -grid_lines(0.0, depth, [hole_depth], (0.0, min(2.0 * contact_size, hole_depth)), contact_size, coarse)[::-1]
+    x, keep_x, fine_x = _hub_lines(width, hub_width, screw_x, hole_half_size, relief_half_width, contact_size, coarse)
     z = grid_lines(-half_t, half_t, [-hole_half_size, hole_half_size], (-half_t, half_t), contact_size, coarse)
     solids = [((-0.5 * width, -depth, -half_t), (0.5 * width, 0.0, half_t))]
     voids = [((s * screw_x - hole_half_size, -hole_depth, -hole_half_size),
               (s * screw_x + hole_half_size, 1.0, hole_half_size)) for s in (-1, 1)]
-    return union_of_boxes(x, y, z, solids, voids)
+    transitions = _transition_plan(contact_size, coarse, hole_depth)
+    if transitions is None:
+        y = -grid_lines(0.0, depth, [hole_depth], (0.0, min(2.0 * contact_size, hole_depth)), contact_size, coarse)[::-1]
+        return union_of_boxes(x, y, z, solids, voids)
+    plan, reached, cell = transitions
+    plan += _graded_layers(reached, [hole_depth, depth], cell, coarse)
+    keep_z = [-half_t, -hole_half_size, hole_half_size, half_t]
+    return _layered(x, z, plan, keep_x, keep_z, fine_x, [(-half_t, half_t)], solids, voids, mirror=True)
