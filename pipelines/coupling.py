@@ -196,10 +196,13 @@ def coupled_patterns(scene: Scene, body, mesh, loading: MultibodyLoading) -> tup
 
 
 #: the shared factorisation is used while the nodes it adds to the face (coupled nodes, wing
-#: tips) are at most this fraction of the face's: PARDISO's Schur phase grows about as the
-#: boundary size to the power 1.7 (measured, CW at 2.5 mm: boundary of 4,800 DOFs 55 s, of
-#: 11,000 DOFs 212 s), so a large extra boundary costs more than a second factorisation (31 s)
-SHARE_LIMIT = 0.25
+#: tips) are at most this fraction of the face's. PARDISO's Schur phase grows about as the
+#: boundary size to the power 1.7, and a second factorisation of a graded body is cheap, so a
+#: larger boundary costs more than it saves. Measured on the extreme CW at 2.5 mm (one BLAS
+#: thread, load ~11 on 2 cores): tensor mesh, screw heads as fine as the pads (boundary 11,000
+#: DOFs against 4,800): build 420 s shared, 173 s with two factorisations; 3:1-graded mesh (heads
+#: 9 % of the face): CW condensation 109 s shared, about 45 s with two factorisations
+SHARE_LIMIT = 0.05
 
 
 def share_factorisation(body, face: np.ndarray) -> bool:
