@@ -104,7 +104,7 @@ def component_names(dim: int, rotations: bool) -> list[str]:
     return names
 
 
-def _condense_body(body: Body, surface: Surface | None, offset: int) -> CondensedBody:
+def _condense_body(body: Body, surface: Surface | None, offset: int, condenser=None) -> CondensedBody:
     elastic = body.elastic
     stiffness = elastic.stiffness
     coupling = None
@@ -140,7 +140,11 @@ def _condense_body(body: Body, surface: Surface | None, offset: int) -> Condense
     fixed = fixed[~on_surface]
     loads = {name: vector if coupling is None else coupling.reduce_vector(vector)
              for name, vector in body.body_loads.items()}
-    condensation = condense(stiffness, retained, fixed, loads or None)
+    if condenser is None:
+        condensation = condense(stiffness, retained, fixed, loads or None)
+    else:
+        transformation = None if coupling is None else coupling.transformation
+        condensation = condenser(stiffness, transformation, retained, fixed, loads or None)
     reference_dofs, start = {}, offset + surface_dofs.size
     for name, dofs in zip(names, reference):
         reference_dofs[name] = np.arange(start, start + dofs.size)
@@ -152,7 +156,7 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
              loads: dict | None = None, motions: dict | None = None,
              search_distance: float = np.inf,
              initial_gap: np.ndarray | None = None, bolts: tuple = (),
-             pairing: str = "auto") -> Assembly:
+             pairing: str = "auto", condensers: dict | None = None) -> Assembly:
     """Condense the bodies and pair ``slave`` = (body name, facet indices) with ``master``.
 
     loads / motions: pattern name → list of (body, reference point, component, value);
@@ -162,9 +166,12 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     bolts: :class:`contact.bolts.Bolt` items; each adds a pretension load pattern
     "bolt.<name>" that ramps in the preload and is locked afterwards.
     pairing: "auto", "node_to_segment" or "mortar" (see :func:`contact.interface.pair_surfaces`).
+    condensers: body name → callable (stiffness, transformation, retained, fixed, loads) →
+    Condensation used instead of :func:`reduction.condensation.condense` (a body whose
+    factorisation is shared with another load case, :class:`pipelines.coupling.SharedCondenser`).
     """
     surfaces = _contact_surfaces(bodies, slave, master)
-    condensed, n = _condense_bodies(bodies, surfaces)
+    condensed, n = _condense_bodies(bodies, surfaces, condensers or {})
     stiffness = _block_stiffness(condensed, n)
     pairing = pair_with_gap(surfaces[slave[0]], surfaces[master[0]], search_distance, initial_gap, pairing)
     dim = pairing.normal.shape[1]
@@ -198,11 +205,12 @@ def _contact_surfaces(bodies: list[Body], slave: tuple[str, np.ndarray],
     return surfaces
 
 
-def _condense_bodies(bodies: list[Body], surfaces: dict[str, Surface]) -> tuple[dict[str, CondensedBody], int]:
+def _condense_bodies(bodies: list[Body], surfaces: dict[str, Surface],
+                     condensers: dict) -> tuple[dict[str, CondensedBody], int]:
     """Condense each body in order; returns body name → condensed body and the total DOF count."""
     condensed, offset = {}, 0
     for body in bodies:
-        item = _condense_body(body, surfaces.get(body.name), offset)
+        item = _condense_body(body, surfaces.get(body.name), offset, condensers.get(body.name))
         condensed[body.name] = item
         offset += item.size
     return condensed, offset

@@ -153,15 +153,17 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
     data = scene.data
     coupled_body = data.get("coupling", {}).get("body")
     loading = (multibody or multibody_loading(scene, cache)) if coupled_body else None
-    pattern_names = ()
+    pattern_names, condensers = (), {}
     bodies, built_meshes, named_sets = [], {}, {}
     for name, spec in data["bodies"].items():
         mesh, named_sets[name] = _body_mesh(scene, name, spec, (meshes_override or {}).get(name))
         built_meshes[name] = mesh
         body = _body(scene, name, spec, mesh, named_sets[name])
         if name == coupled_body:
-            inertia = coupled_patterns(scene, body.elastic, mesh, loading)
+            inertia, condenser = coupled_patterns(scene, body, mesh, loading)
             body = replace(body, body_loads={**body.body_loads, **inertia})
+            if condenser is not None:
+                condensers[name] = condenser
             pattern_names = tuple(inertia)
         bodies.append(body)
     contact = data["contact"]
@@ -174,7 +176,7 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
     assembly = assemble(bodies, slave, master, loads=_control_patterns(scene, "loads"),
                         motions=_control_patterns(scene, "motions"),
                         search_distance=contact.get("search_distance", np.inf), bolts=bolts,
-                        pairing=contact.get("pairing", "auto"))
+                        pairing=contact.get("pairing", "auto"), condensers=condensers)
     shapes = {e["name"]: e["history"] for kind in ("loads", "motions", "body_loads") for e in data.get(kind, [])}
     shapes.update({f"bolt.{bolt.name}": "ramp" for bolt in bolts})
     shapes.update({name: "history" for name in pattern_names})

@@ -105,33 +105,52 @@ def centrifugal_pattern(body: ElasticBody, mean_frame_acceleration: np.ndarray, 
     return load + mean_spin_squared * rigid_body_inertia(body, np.zeros(3), None, _SPIN_AXIS)
 
 
-def wing_mode_pattern(body: ElasticBody, modes: ModeField, mode: int, frequency_hz: float,
-                      clamped_nodes: np.ndarray) -> np.ndarray:
-    """Load (N) of one elastic mode (the wing "torsion") per mm of wing torsion.
-
-    The elastic force ω² M Ψ of mode ``mode`` of ``modes`` (interpolated onto the body; ω from
-    ``frequency_hz``), scaled so that the body with ``clamped_nodes`` held deflects by a wing
-    torsion (u_z(+x tip) − u_z(−x tip))/2 of exactly 1 mm under it.
-    """
-    from reduction.factorization import factorize
-
+def wing_mode_load(body: ElasticBody, modes: ModeField, mode: int, frequency_hz: float) -> np.ndarray:
+    """The elastic force ω² M Ψ (N per unit modal coordinate) of mode ``mode`` of ``modes``,
+    interpolated onto the body, ω from ``frequency_hz``."""
     shapes = interpolate_modes(modes, body.coordinates)[:, :, mode]
     field = np.zeros(body.n_dofs)
     field[body.node_dofs.ravel()] = shapes.ravel()
     omega = 2.0 * np.pi * frequency_hz
-    load = omega ** 2 * (body.mass @ field)
+    return omega ** 2 * (body.mass @ field)
+
+
+def wing_tip_dofs(body: ElasticBody) -> tuple[np.ndarray, np.ndarray]:
+    """u_z DOFs of the wing-tip edges (outer top edge at the −x and at the +x extreme)."""
+    coordinates = body.coordinates
+    tips = [np.flatnonzero((np.abs(coordinates[:, 0] - sign * coordinates[:, 0].max()) < 1e-6)
+                           & (np.abs(coordinates[:, 1] - coordinates[:, 1].max()) < 1e-6)) for sign in (-1, 1)]
+    if any(t.size == 0 for t in tips):
+        raise InputError("the counterweight contact mesh has no wing-tip edge (outer face at the x extremes)")
+    return body.node_dofs[tips[0], 2], body.node_dofs[tips[1], 2]
+
+
+def wing_torsion(minus_tip_uz: np.ndarray, plus_tip_uz: np.ndarray) -> float:
+    """Wing torsion (mm): (mean u_z of the +x tip edge − mean u_z of the −x tip edge)/2."""
+    torsion = 0.5 * (float(np.mean(plus_tip_uz)) - float(np.mean(minus_tip_uz)))
+    if abs(torsion) < 1e-12:
+        raise InputError("the interpolated torsion mode does not twist the counterweight's wings")
+    return torsion
+
+
+def wing_mode_pattern(body: ElasticBody, modes: ModeField, mode: int, frequency_hz: float,
+                      clamped_nodes: np.ndarray) -> np.ndarray:
+    """Load (N) of one elastic mode (the wing "torsion") per mm of wing torsion.
+
+    The elastic force ω² M Ψ (:func:`wing_mode_load`), scaled so that the body with
+    ``clamped_nodes`` held deflects by a wing torsion (u_z(+x tip) − u_z(−x tip))/2 of exactly
+    1 mm under it. Factorises the clamped body for this one solve; a run shares the body's
+    factorisation with its condensation instead (:func:`pipelines.coupling.coupled_patterns`,
+    :meth:`reduction.condensation.BoundarySchur.clamped_response`).
+    """
+    from reduction.factorization import factorize
+
+    load = wing_mode_load(body, modes, mode, frequency_hz)
     fixed = np.zeros(body.n_dofs, dtype=bool)
     fixed[body.node_dofs[clamped_nodes].ravel()] = True
     free = np.flatnonzero(~fixed)
     displacement = np.zeros(body.n_dofs)
     factor = factorize(body.stiffness[free][:, free].tocsc(), label="clamped counterweight")
     displacement[free] = factor.solve(load[free])
-    coordinates = body.coordinates
-    tips = [np.flatnonzero((np.abs(coordinates[:, 0] - sign * coordinates[:, 0].max()) < 1e-6)
-                           & (np.abs(coordinates[:, 1] - coordinates[:, 1].max()) < 1e-6)) for sign in (-1, 1)]
-    if any(t.size == 0 for t in tips):
-        raise InputError("the counterweight contact mesh has no wing-tip edge (outer face at the x extremes)")
-    torsion = 0.5 * (displacement[body.node_dofs[tips[1], 2]].mean() - displacement[body.node_dofs[tips[0], 2]].mean())
-    if abs(torsion) < 1e-12:
-        raise InputError("the interpolated torsion mode does not twist the counterweight's wings")
-    return load / torsion
+    minus, plus = wing_tip_dofs(body)
+    return load / wing_torsion(displacement[minus], displacement[plus])

@@ -72,6 +72,10 @@ class _Handle:
             self.perm[schur_rows] = 1
         self._finalizer = weakref.finalize(self, _release, self.state, self.iparm)
 
+    def release(self) -> None:
+        """Free the factor now (else when the handle is garbage-collected)."""
+        self._finalizer()
+
     def call(self, phase: int, rhs: np.ndarray, out: np.ndarray, n_rhs: int = 1) -> None:
         error = _c_int(0)
         _library()(
@@ -103,6 +107,7 @@ class _Handle:
 
 
 def _release(state: np.ndarray, iparm: np.ndarray) -> None:
+    """Free PARDISO's memory of one instance (idempotent: the state is zeroed)."""
     if not state.any():
         return
     dummy = np.zeros(1)
@@ -116,6 +121,7 @@ def _release(state: np.ndarray, iparm: np.ndarray) -> None:
         dummy.ctypes.data_as(_ptr(ctypes.c_double)), dummy.ctypes.data_as(_ptr(ctypes.c_double)),
         ctypes.byref(_c_int(0)),
     )
+    state[:] = 0
 
 
 def schur_complement(matrix: sp.spmatrix, rows: np.ndarray, label: str = "matrix") -> np.ndarray:
@@ -127,9 +133,13 @@ def schur_complement(matrix: sp.spmatrix, rows: np.ndarray, label: str = "matrix
     handle = _Handle(matrix, rows, label)
     result = np.zeros(rows.size * rows.size)
     handle.call(_ANALYSE_FACTOR, np.zeros(handle.n), result)
+    handle.release()  # the factor is not used again: free it before the complement is copied
+    result = result.reshape(rows.size, rows.size)
+    if np.all(np.diff(rows) > 0):
+        return result
     # PARDISO returns the complement in ascending row order
     position = np.argsort(np.argsort(rows))
-    return result.reshape(rows.size, rows.size)[np.ix_(position, position)]
+    return result[np.ix_(position, position)]
 
 
 class Cholesky:

@@ -7,10 +7,13 @@ Cattaneo-Mindlin) are resolved without paying for a uniformly fine body.
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 import numpy as np
 import skfem
 
 from reduction.errors import InputError
+from reduction.mesh.layers import layered_block
 
 
 def graded_coordinates(fine_half_width: float, fine_size: float, total_half_width: float,
@@ -202,37 +205,51 @@ def beam_with_hole(length: float, width: float, thickness: float, hole_x: float,
     return skfem.MeshHex(np.vstack([x, y, z]), t)
 
 
-def grid_lines(start: float, end: float, breaks, fine: tuple[float, float], fine_size: float,
+def grid_lines(start: float, end: float, breaks, fine, fine_size: float,
                coarse_size: float, growth: float = 1.3) -> np.ndarray:
     """Sorted 1D grid coordinates on [start, end] (mm) through every point of ``breaks``.
 
-    Uniform spacing of at most ``fine_size`` on the interval ``fine``; elsewhere the spacing
-    grows by ``growth`` away from the fine interval up to ``coarse_size``. Two meshes built
-    with the same breaks and fine interval share their lines on that interval (matching faces).
+    ``fine``: one interval (low, high) or a list of them. Uniform spacing of at most
+    ``fine_size`` on each fine interval; elsewhere the spacing grows by ``growth`` away from the
+    fine intervals (from both sides between two of them) up to ``coarse_size``. Two meshes built
+    with the same breaks and fine intervals share their lines there (matching faces).
     """
-    fine_low, fine_high = max(start, fine[0]), min(end, fine[1])
-    points = np.unique(np.round(np.concatenate([[start, end, fine_low, fine_high],
+    intervals = [fine] if np.isscalar(fine[0]) else list(fine)
+    intervals = [(max(start, low), min(end, high)) for low, high in intervals]
+    ends = [value for interval in intervals for value in interval]
+    points = np.unique(np.round(np.concatenate([[start, end], ends,
                                                 [b for b in breaks if start <= b <= end]]), 9))
     lines = [points[:1]]
     for low, high in zip(points[:-1], points[1:]):
         length = high - low
-        if fine_low - 1e-9 <= low and high <= fine_high + 1e-9:
+        if any(a - 1e-9 <= low and high <= b + 1e-9 for a, b in intervals):
             n = int(np.ceil(length / fine_size - 1e-9))
             lines.append(np.linspace(low, high, n + 1)[1:])
             continue
-        # graded away from the fine interval: sizes fine_size·growth^k capped at coarse_size
-        sizes, total, h = [], 0.0, fine_size
-        while total < length - 1e-9:
-            h = min(h * growth, coarse_size)
-            sizes.append(h)
-            total += h
-        sizes = np.asarray(sizes) * length / total
-        if high <= fine_low + 1e-9:  # left of the fine interval: finest next to it
+        fine_left = any(b <= low + 1e-9 for _, b in intervals)
+        fine_right = any(a >= high - 1e-9 for a, _ in intervals)
+        sizes = _graded_sizes(length, fine_size, coarse_size, growth, both=fine_left and fine_right)
+        if fine_right and not fine_left:  # finest next to the fine interval on the right
             sizes = sizes[::-1]
-        lines.append(low + np.cumsum(sizes))
-    coordinates = np.concatenate(lines)
-    coordinates[-1] = end
-    return coordinates
+        graded = low + np.cumsum(sizes)
+        graded[-1] = high  # exactly on the break, not a rounding off it
+        lines.append(graded)
+    return np.concatenate(lines)
+
+
+def _graded_sizes(length: float, fine_size: float, coarse_size: float, growth: float,
+                  both: bool = False) -> np.ndarray:
+    """Cell sizes (mm) filling ``length``: fine_size·growth^k capped at coarse_size, growing from
+    the left end (or from both ends towards the middle), scaled to sum to ``length``."""
+    left, right, total, h = [], [], 0.0, fine_size
+    while total < length - 1e-9:
+        h = min(h * growth, coarse_size)
+        left.append(h)
+        total += h
+        if both and total < length - 1e-9:
+            right.append(h)
+            total += h
+    return np.asarray(left + right[::-1]) * length / total
 
 
 def cells_inside(mesh, boxes) -> np.ndarray:
@@ -266,46 +283,126 @@ def counterweight_solids(width: float, height: float, thickness: float, hub_widt
             ((-0.5 * width, hub_height, -half_t), (0.5 * width, height, half_t))]
 
 
+def _far_size(contact_size: float, coarse_size: float | None) -> float:
+    """Element size (mm) far from the contact: ``coarse_size``, by default 4 × contact_size but
+    at least 40 mm (the shipped 10 mm meshes unchanged; a fine mesh grades to 40 mm, instead of
+    refining the whole body)."""
+    if coarse_size is not None:
+        return max(float(coarse_size), contact_size)
+    return max(4.0 * contact_size, 40.0)
+
+
+def _hub_lines(width: float, hub_width: float, screw_x: float, hole_half_size: float,
+               relief_half_width: float, contact_size: float, coarse: float):
+    """x lines of the CW–web joint: fine on the hub face, or only on its two pads
+    relief_half_width ≤ |x| ≤ hub_width/2 when the central relief is given (> 0); with the
+    breaks they keep and their fine intervals: (lines, breaks, fine intervals)."""
+    half_hub = 0.5 * hub_width
+    if not 0.0 <= relief_half_width < screw_x - hole_half_size:
+        raise InputError("relief_half_width must be >= 0 and leave the screw holes on the pads "
+                         "(relief_half_width < screw_x − hole_half_size)")
+    holes_x = [s * screw_x + d * hole_half_size for s in (-1, 1) for d in (-1, 1)]
+    fine = [(-half_hub, half_hub)]
+    if relief_half_width > 0:
+        fine = [(-half_hub, -relief_half_width), (relief_half_width, half_hub)]
+    breaks = holes_x + [-half_hub, half_hub, -0.5 * width, 0.5 * width] + [end for interval in fine for end in interval]
+    return grid_lines(-0.5 * width, 0.5 * width, holes_x + [-half_hub, half_hub], fine, contact_size, coarse), \
+        breaks, fine
+
+
+def _transition_plan(size: float, coarse: float, room: float):
+    """Layers from the contact face (depth 0 … ``room`` mm): two of ``size``, then rounds of an x
+    and a z transition (:mod:`reduction.mesh.layers`), each 2·(cell size) thick, tripling the cell
+    size while it stays ≤ ``coarse`` and the rounds fit in ``room``. Returns (plan, depth
+    reached, cell size reached), or None when no round fits or the far size is at most 4 × the
+    contact size (the tensor grid is kept: the shipped 10 mm meshes are unchanged)."""
+    if coarse <= 4.0 * size + 1e-9:
+        return None
+    plan, depth, cell = [("regular", 0.0, size), ("regular", size, 2.0 * size)], 2.0 * size, size
+    while 3.0 * cell <= coarse + 1e-9 and depth + 4.0 * cell <= room + 1e-9:
+        plan += [("x", depth, depth + 2.0 * cell), ("z", depth + 2.0 * cell, depth + 4.0 * cell)]
+        depth, cell = depth + 4.0 * cell, 3.0 * cell
+    return None if len(plan) == 2 else (plan, depth, cell)
+
+
+def _graded_layers(depth: float, stops, cell: float, coarse: float) -> list:
+    """Regular layers from ``depth`` through every depth of ``stops`` (ascending, the last the
+    block's end), their thickness growing ×1.3 from ``cell`` up to ``coarse`` in each stretch."""
+    layers = []
+    for stop in stops:
+        if stop <= depth + 1e-9:
+            continue
+        edges = depth + np.concatenate([[0.0], np.cumsum(_graded_sizes(stop - depth, cell, coarse, 1.3))])
+        edges[-1] = stop
+        layers += [("regular", a, b) for a, b in pairwise(edges)]
+        depth = stop
+    return layers
+
+
+def _layered(x, z, plan, keep_x, keep_z, fine_x, fine_z, solids, voids, mirror: bool) -> skfem.MeshHex:
+    """The layered mesh (y = depth, or y = −depth with ``mirror``) cut to the solids minus voids."""
+    mesh = layered_block(x, z, plan, keep_x, keep_z, fine_x, fine_z)
+    if mirror:  # y → −y, and the corner order with it (swap the two y faces) to keep volumes positive
+        mesh = skfem.MeshHex(mesh.p * np.array([[1.0], [-1.0], [1.0]]), np.ascontiguousarray(mesh.t[[1, 0, 4, 5, 2, 3, 7, 6]]))
+    keep = cells_inside(mesh, solids) & ~cells_inside(mesh, voids)
+    return mesh.remove_elements(np.flatnonzero(~keep))
+
+
 def counterweight_block(width: float, height: float, thickness: float, hub_width: float, hub_height: float,
                         screw_x: float, hole_half_size: float, contact_size: float,
-                        coarse_size: float | None = None) -> skfem.MeshHex:
+                        coarse_size: float | None = None, relief_half_width: float = 0.0) -> skfem.MeshHex:
     """Generic counterweight in its own frame (the multibody model's, mbs.counterweight): contact
     face y = 0 of the hub |x| ≤ hub_width/2, wing plate |x| ≤ width/2 over hub_height ≤ y ≤
     height, thickness along z; square through holes (half-size ``hole_half_size``) for two
-    screws at x = ±screw_x. Element size ``contact_size`` on the hub face, graded to ``coarse_size``.
+    screws at x = ±screw_x. Element size ``contact_size`` on the hub face (on its pads
+    |x| ≥ relief_half_width when that is > 0) and in the two layers under it, graded to
+    ``coarse_size`` (:func:`_far_size`) away from them: in y by growing layers, in x and z by
+    3:1 transition layers in the hub (:mod:`reduction.mesh.layers`, conforming hexahedra, no
+    hanging nodes) when the far size exceeds 4 × contact_size; otherwise a tensor grid (the
+    shipped 10 mm mesh). All lengths mm.
     """
     if not (0 < hub_width < width and 0 < hub_height < height and
             hole_half_size < screw_x < 0.5 * hub_width - hole_half_size and 2 * hole_half_size < thickness):
         raise InputError("counterweight_block: needs hub_width < width, hub_height < height and the screw "
                          "holes inside the hub face (hole_half_size < screw_x < hub_width/2 − hole_half_size)")
-    coarse = coarse_size or 4.0 * contact_size
-    half_hub, half_t = 0.5 * hub_width, 0.5 * thickness
-    holes_x = [s * screw_x + d * hole_half_size for s in (-1, 1) for d in (-1, 1)]
-    x = grid_lines(-0.5 * width, 0.5 * width, holes_x + [-half_hub, half_hub], (-half_hub, half_hub),
-                   contact_size, coarse)
-    y = grid_lines(0.0, height, [hub_height], (0.0, min(2.0 * contact_size, hub_height)), contact_size, coarse)
+    coarse = _far_size(contact_size, coarse_size)
+    half_t = 0.5 * thickness
+    x, keep_x, fine_x = _hub_lines(width, hub_width, screw_x, hole_half_size, relief_half_width, contact_size, coarse)
     z = grid_lines(-half_t, half_t, [-hole_half_size, hole_half_size], (-half_t, half_t), contact_size, coarse)
     voids = [((s * screw_x - hole_half_size, -1.0, -hole_half_size),
               (s * screw_x + hole_half_size, height + 1.0, hole_half_size)) for s in (-1, 1)]
-    return union_of_boxes(x, y, z, counterweight_solids(width, height, thickness, hub_width, hub_height), voids)
+    solids = counterweight_solids(width, height, thickness, hub_width, hub_height)
+    transitions = _transition_plan(contact_size, coarse, hub_height)
+    if transitions is None:
+        y = grid_lines(0.0, height, [hub_height], (0.0, min(2.0 * contact_size, hub_height)), contact_size, coarse)
+        return union_of_boxes(x, y, z, solids, voids)
+    plan, depth, cell = transitions
+    plan += _graded_layers(depth, [hub_height, height], cell, coarse)
+    keep_z = [-half_t, -hole_half_size, hole_half_size, half_t]
+    return _layered(x, z, plan, keep_x, keep_z, fine_x, [(-half_t, half_t)], solids, voids, mirror=False)
 
 
 def web_block(width: float, depth: float, thickness: float, hub_width: float, screw_x: float,
               hole_half_size: float, hole_depth: float, contact_size: float,
-              coarse_size: float | None = None) -> skfem.MeshHex:
+              coarse_size: float | None = None, relief_half_width: float = 0.0) -> skfem.MeshHex:
     """The crank-web side of a counterweight joint: block |x| ≤ width/2, −depth ≤ y ≤ 0, thickness
     along z, with blind threaded holes (square, half-size ``hole_half_size``, ``hole_depth`` deep)
-    at x = ±screw_x. Its face y = 0 matches :func:`counterweight_block` on the hub (same lines)."""
+    at x = ±screw_x. Its face y = 0 matches :func:`counterweight_block` on the hub (same lines,
+    same grading: give both the same contact_size, coarse_size and relief_half_width)."""
     if not (hub_width <= width and hole_depth < depth):
         raise InputError("web_block: needs hub_width <= width and hole_depth < depth")
-    coarse = coarse_size or 4.0 * contact_size
-    half_hub, half_t = 0.5 * hub_width, 0.5 * thickness
-    holes_x = [s * screw_x + d * hole_half_size for s in (-1, 1) for d in (-1, 1)]
-    x = grid_lines(-0.5 * width, 0.5 * width, holes_x + [-half_hub, half_hub], (-half_hub, half_hub),
-                   contact_size, coarse)
-    y = -grid_lines(0.0, depth, [hole_depth], (0.0, min(2.0 * contact_size, hole_depth)), contact_size, coarse)[::-1]
+    coarse = _far_size(contact_size, coarse_size)
+    half_t = 0.5 * thickness
+    x, keep_x, fine_x = _hub_lines(width, hub_width, screw_x, hole_half_size, relief_half_width, contact_size, coarse)
     z = grid_lines(-half_t, half_t, [-hole_half_size, hole_half_size], (-half_t, half_t), contact_size, coarse)
     solids = [((-0.5 * width, -depth, -half_t), (0.5 * width, 0.0, half_t))]
     voids = [((s * screw_x - hole_half_size, -hole_depth, -hole_half_size),
               (s * screw_x + hole_half_size, 1.0, hole_half_size)) for s in (-1, 1)]
-    return union_of_boxes(x, y, z, solids, voids)
+    transitions = _transition_plan(contact_size, coarse, hole_depth)
+    if transitions is None:
+        y = -grid_lines(0.0, depth, [hole_depth], (0.0, min(2.0 * contact_size, hole_depth)), contact_size, coarse)[::-1]
+        return union_of_boxes(x, y, z, solids, voids)
+    plan, reached, cell = transitions
+    plan += _graded_layers(reached, [hole_depth, depth], cell, coarse)
+    keep_z = [-half_t, -hole_half_size, hole_half_size, half_t]
+    return _layered(x, z, plan, keep_x, keep_z, fine_x, [(-half_t, half_t)], solids, voids, mirror=True)

@@ -141,3 +141,76 @@ def test_free_body_condenses_to_singular_stiffness_with_rigid_modes(solver):
     scale = np.abs(condensed.stiffness).max() * np.abs(rigid).max()
     assert np.abs(condensed.stiffness @ rigid).max() < 1e-9 * scale
     assert np.linalg.matrix_rank(condensed.stiffness, tol=1e-9 * np.abs(condensed.stiffness).max()) == retained.size - 3
+
+
+def _small_counterweight():
+    """A small CW (mm): the shipped joint's layout scaled down, screw heads coupled (RBE2) to two
+    reference points on the top face, a wing load that twists it (a torsion-like inertia field)."""
+    from reduction.coupling import rigid_couplings
+    from reduction.mesh.generators import counterweight_block
+
+    mesh = counterweight_block(300.0, 80.0, 30.0, 140.0, 15.0, 50.0, 8.0, 10.0, coarse_size=20.0,
+                               relief_half_width=30.0)
+    body = assemble_elastic_body(mesh, **STEEL)
+    x, y = body.coordinates[:, 0], body.coordinates[:, 1]
+    face = np.flatnonzero(np.abs(y) < 1e-9)
+    pads = face[np.abs(x[face]) >= 30.0 - 1e-9]
+    heads = [np.flatnonzero((np.abs(y - 80.0) < 1e-9) & (s * x >= 30.0 - 1e-9) & (s * x <= 70.0 + 1e-9))
+             for s in (-1, 1)]
+    coupling = rigid_couplings(body.n_dofs, body.node_dofs, body.coordinates,
+                               [(h, np.array([s * 50.0, 80.0, 0.0])) for h, s in zip(heads, (-1, 1))],
+                               rotations=True)
+    field = np.zeros(body.n_dofs)
+    field[body.node_dofs[:, 2]] = x * y / 80.0
+    wing = 1e6 * (body.mass @ field)  # ω² M Ψ with a torsion-like Ψ, N
+    spin = np.zeros(body.n_dofs)
+    spin[body.node_dofs[:, 1]] = 1e7 * (y + 230.0)
+    return body, face, pads, heads, coupling, {"wing": wing, "spin": body.mass @ spin}
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_shared_factor_equals_the_two_factor_path(solver):
+    """The wing-mode normalisation (face clamped, heads free) and the condensation of the coupled
+    body onto its pads and reference points, both from ONE factorisation of the body, equal the
+    previous path (a factor of the clamped body, then the condensation's own) to 1e-10."""
+    from reduction.condensation import boundary_schur, condense_from_boundary
+    from reduction.factorization import factorize
+    from reduction.modal_loads import wing_tip_dofs, wing_torsion
+
+    body, face, pads, heads, coupling, loads = _small_counterweight()
+    minus, plus = wing_tip_dofs(body)
+    # previous path: the clamped body's own factor for the torsion, then condense(Tᵀ K T)
+    held = body.node_dofs[face].ravel()
+    free = np.setdiff1d(np.arange(body.n_dofs), held)
+    u = np.zeros(body.n_dofs)
+    u[free] = factorize(body.stiffness[free][:, free], solver=solver).solve(loads["wing"][free])
+    torsion = wing_torsion(u[minus], u[plus])
+    reduced = coupling.reduce_matrix(body.stiffness)
+    retained = np.concatenate([coupling.kept[body.node_dofs[pads].ravel()], coupling.reference_dofs.ravel()])
+    reduced_loads = {name: coupling.reduce_vector(v) for name, v in loads.items()}
+    before = condense(reduced, retained, loads=reduced_loads, solver=solver)
+    # shared path: one condensation onto face, heads and tips answers both
+    boundary = np.concatenate([held, minus, plus] + [body.node_dofs[h].ravel() for h in heads])
+    schur = boundary_schur(body.stiffness, boundary, loads=loads, solver=solver)
+    shared_u = schur.clamped_response(held, "wing")
+    index = np.searchsorted(schur.boundary, np.concatenate([minus, plus]))
+    assert wing_torsion(shared_u[index[:minus.size]], shared_u[index[minus.size:]]) == pytest.approx(torsion, rel=1e-10)
+    after = condense_from_boundary(schur, reduced, coupling.transformation, retained, loads=reduced_loads)
+    assert _relative(after.stiffness, before.stiffness) < 1e-10
+    for name in loads:
+        assert _relative(after.loads[name], before.loads[name]) < 1e-10
+    np.testing.assert_array_equal(after.interior, before.interior)
+    # the expanded field of the shared condensation is the full model's
+    u_r = np.linalg.lstsq(after.stiffness, after.loads["spin"], rcond=None)[0]
+    np.testing.assert_allclose(after.expand(u_r, {"spin": 1.0}), before.expand(u_r, {"spin": 1.0}),
+                               rtol=0, atol=1e-10 * np.abs(before.expand(u_r, {"spin": 1.0})).max())
+
+
+def test_shared_factor_needs_the_coupled_nodes_on_its_boundary():
+    from reduction.condensation import boundary_schur, condense_from_boundary
+
+    body, face, pads, _, coupling, _ = _small_counterweight()
+    schur = boundary_schur(body.stiffness, body.node_dofs[face].ravel(), solver="splu")
+    retained = coupling.kept[body.node_dofs[pads].ravel()]
+    with pytest.raises(InputError, match="coupled node"):
+        condense_from_boundary(schur, coupling.reduce_matrix(body.stiffness), coupling.transformation, retained)
