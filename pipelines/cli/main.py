@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pipelines import interrupts
 from reduction.errors import InputError
 
 
@@ -569,6 +570,7 @@ def _interrupt(signum, frame):
     files) then runs to the end: a second Ctrl-C, or a library that raises the first one again
     once it has caught it, must not break it off with a traceback."""
     signal.signal(signal.SIGINT, lambda *_: None)
+    interrupts.request()  # raised again at the next increment if this one is swallowed
     raise KeyboardInterrupt
 
 
@@ -582,6 +584,7 @@ def main(argv=None) -> int:
     try:
         return _main(argv, resumable)
     except KeyboardInterrupt:
+        interrupts.clear()
         print("fretwork: interrupted" + "".join(f"; continue with --resume (from {path})" for path in resumable
                                                  if path.is_file()), file=sys.stderr)
         _forget_interrupt()

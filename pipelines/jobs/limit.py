@@ -30,6 +30,7 @@ from contact.verdict import Ending
 from reduction.errors import InputError
 
 SAFE = "stick"
+NOT_CONVERGED = "not_converged"  # a run whose Newton failed even after its cutbacks: not shown to stick
 FIGURES = ("clamp_force_loss_fraction", "damaged_area_fraction", "slip_area_fraction", "cof_evolved_area_fraction",
            "worn_area_fraction", "max_wear_depth_mm", "bolt_force_initial_N", "bolt_force_final_N",
            "min_stick_margin", "cycles_run", "equivalent_cycles")
@@ -170,7 +171,9 @@ def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_d
         except RunStopped as stopped:
             if stopped.ending in STOPPED:
                 return AmplitudeRun(amplitude_mm, "loosening", {"note": STOPPED[stopped.ending]})
-            return AmplitudeRun(amplitude_mm, None, {}, f"ConvergenceError: {stopped}")
+            # Not shown to stick: the scan counts it as a change of verdict like any other and
+            # lists it, so that one hard amplitude does not end the search for the others.
+            return AmplitudeRun(amplitude_mm, NOT_CONVERGED, {"note": f"Newton did not converge: {stopped}"})
         summary = {k: v for k, v in outcome.summary.items() if isinstance(v, (int, float, str, type(None)))}
         return AmplitudeRun(amplitude_mm, outcome.summary["verdict"], summary)
 
@@ -252,7 +255,7 @@ def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
                 ax.scatter(amplitude[mask], values[mask], color=colour, label=verdict, zorder=2)
         if failed_early:
             ax.scatter([1e3 * r.amplitude_mm for r in failed_early], [ax.get_ylim()[1]] * len(failed_early),
-                       marker="x", color="tab:red", label="slides off / runaway wear", zorder=2, clip_on=False)
+                       marker="x", color="tab:red", label="slid off / runaway wear / not converged", zorder=2, clip_on=False)
         if result.limit_mm is not None:
             ax.axvline(1e3 * result.limit_mm, color="k", linestyle="--", linewidth=1)
         for change in result.changes if not result.monotone else ():

@@ -57,6 +57,7 @@ import numpy as np
 from contact.energy import EnergyMeter
 from contact.procedure import PHASES, CycleSummary, IncrementRecord, Observer
 from mbs.results import write_loading_histories
+from pipelines import interrupts
 from pipelines.output.checkpoint import read_snapshot, write_snapshot
 from reduction.errors import InputError
 
@@ -216,6 +217,7 @@ class ResultsWriter(Observer):
         self._flushed_at = time.monotonic()
 
     def increment(self, record: IncrementRecord) -> None:
+        interrupts.check()
         self._row("time", record.time, "cycles")
         self._row("cycle", record.cycle, "1")
         self._row("phase", PHASES.index(record.phase), "0 preload, 1 cof, 2 wear")
