@@ -574,12 +574,22 @@ def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
+def _unraisable(unraisable) -> None:
+    """A Ctrl-C raised while Python ran a weak-reference callback or a destructor cannot
+    propagate ("Exception ignored"): say nothing, :mod:`pipelines.interrupts` raises it again at
+    the next increment. Anything else is reported as Python would."""
+    if isinstance(unraisable.exc_value, KeyboardInterrupt):
+        return
+    sys.__unraisablehook__(unraisable)
+
+
 def main(argv=None) -> int:
     """Run the ``fretwork`` command ``argv`` (default: the process's arguments); its exit status."""
     ours = threading.current_thread() is threading.main_thread() and \
         signal.getsignal(signal.SIGINT) is signal.default_int_handler
     if ours:
         signal.signal(signal.SIGINT, _interrupt)
+        sys.unraisablehook = _unraisable
     resumable = []
     try:
         return _main(argv, resumable)
@@ -592,6 +602,7 @@ def main(argv=None) -> int:
     finally:
         if ours:
             signal.signal(signal.SIGINT, signal.default_int_handler)
+            sys.unraisablehook = sys.__unraisablehook__
 
 
 def _forget_interrupt() -> None:
