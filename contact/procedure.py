@@ -386,11 +386,7 @@ class _Run:
             figures["bolt_force_final_N"] = final_clamp
             figures["clamp_force_loss_fraction"] = (self.initial_clamp - final_clamp) / self.initial_clamp
         ending = (Ending.SHAKEDOWN if self.stationary else Ending.LOOSENING if stopped_early else Ending.COMPLETED)
-        # Loosening once evident stays the verdict unless the joint shook down afterwards: a
-        # run going on to its life horizon (stop_at_loosening false) may see the rate of
-        # clamp-force loss slow over its last window without the joint being any safer.
-        said = "loosening" if self.loosening_at is not None and not self.stationary else \
-            verdict(self.history, self.procedure, self.stationary)
+        said = verdict(self.history, self.procedure, self.stationary, loosened_before=self.loosening_at is not None)
         return RunResult(said, self.stationary, figures, self.state, self.equilibrium, self.history, ending)
 
 

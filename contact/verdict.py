@@ -103,14 +103,16 @@ def active_slip_area_fraction(area: np.ndarray, nominal_area: float, pressure: n
     return _fractions(area, nominal_area, sliding)
 
 
-def verdict(history: list, procedure, stationary: bool) -> str:
-    """``loosening`` (see :func:`loosening_evident`), else ``stick`` when at most ``area_tolerance``
-    of the area still slid in the last cycle (:func:`active_slip_area_fraction`; histories
+def verdict(history: list, procedure, stationary: bool, loosened_before: bool = False) -> str:
+    """``loosening`` (see :func:`loosening_evident`; also when it was evident earlier in the run,
+    ``loosened_before``, and the joint has not shaken down since: a run going on to its life
+    horizon may see the loss rate slow over its last window without being any safer), else
+    ``stick`` when at most ``area_tolerance`` of the area still slid in the last cycle (:func:`active_slip_area_fraction`; histories
     without it fall back to the status-based slip area), else ``partial_slip`` when a stick
     zone holds and no COF evolved (the status "slip at μ_max" of a contact with μ_0 = μ_max
     says nothing about damage), else ``damage``. See :data:`VERDICT_MEANINGS`."""
     last = history[-1].figures
-    if loosening_evident(history, procedure):
+    if (loosened_before and not stationary) or loosening_evident(history, procedure):
         return "loosening"
     sliding = last.get("active_slip_area_fraction", last["slip_area_fraction"])
     if sliding <= procedure.area_tolerance:

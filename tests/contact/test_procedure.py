@@ -57,3 +57,14 @@ def test_partial_slip_at_a_cof_that_never_rose_is_not_damage():
     assert _verdict(history, PROCEDURE, stationary=False) == "damage"
     history[-1].figures.update(cof_evolved_area_fraction=0.0, stick_area_fraction=0.0, slip_area_fraction=1.0)
     assert _verdict(history, PROCEDURE, stationary=False) == "damage"
+
+
+def test_loosening_evident_earlier_stays_the_verdict_unless_the_joint_shook_down():
+    n = 12
+    force = 30000 - 1000 * (1 - np.exp(-np.arange(n) / 1.5))  # the loss rate slows over the last window
+    history = _history(force, np.full(n, 0.3), np.full(n, 0.7))
+    assert not _loosening(history, PROCEDURE)
+    assert _verdict(history, PROCEDURE, stationary=False) == "damage"
+    assert _verdict(history, PROCEDURE, stationary=False, loosened_before=True) == "loosening"
+    stuck = _history(force, np.full(n, 1.0), np.zeros(n))
+    assert _verdict(stuck, PROCEDURE, stationary=True, loosened_before=True) == "stick"
