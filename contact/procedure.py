@@ -27,7 +27,8 @@ import numpy as np
 from contact.cycle_jump import AdaptiveJump, next_jump, wear_rate
 from contact.law import ContactState, Status, utilised_cof
 from contact.solver import ContactSolver, ConvergenceError, Effects, Equilibrium
-from contact.verdict import Ending, active_slip_area_fraction, cycle_figures, loosening_evident, verdict
+from contact.verdict import (Ending, active_slip_area_fraction, cycle_figures, loosening_evident,
+                             loosening_window_blocks, verdict)
 
 PHASES = ("preload", "cof", "wear")
 HISTORY_SHAPES = ("ramp", "cyclic", "constant")
@@ -72,6 +73,12 @@ class Procedure:
     block (:mod:`contact.cycle_jump`) so that no point's pressure changes by more than
     ``jump_tolerance`` of the mean contact pressure in one block, at most ``max_cycle_jump``.
     life_cycles: the wear phase ends once it stands for this many real cycles.
+    loosening_window: wear blocks over which loosening is judged (:func:`loosening_evident`);
+    with ``loosening_window_cycles`` the least number of blocks the window holds.
+    loosening_window_cycles: judge loosening over the blocks of the last this many real cycles
+    (at least ``loosening_window`` blocks), so that the window means the same engine running
+    time whatever the adaptive jump, which shrinks as the mesh is refined; None: over the last
+    ``loosening_window`` blocks.
     stop_at_loosening: end the run as soon as loosening is evident (:func:`loosening_evident`);
     False runs the wear phase on to ``life_cycles`` (or ``wear_cycles``) so that the clamp-force
     trend of a loosening joint is seen over the whole horizon; the verdict is the same.
@@ -88,6 +95,7 @@ class Procedure:
     cof_during_wear: bool = True
     stationary_window: int = 10
     loosening_window: int = 20
+    loosening_window_cycles: float | None = None
     stop_at_loosening: bool = True
     area_tolerance: float = 0.01
     slip_tolerance: float = 0.1
@@ -316,7 +324,6 @@ class _Run:
         if not resuming:
             self.quiet_cycles = 0
         self.observer.phase(phase, n_cycles)
-        keep = max(self.procedure.loosening_window, 1)
         for count in range(self.done_in_phase if resuming else 0, n_cycles):
             if phase == "wear":
                 if self.equivalent >= self.procedure.life_cycles:
@@ -327,7 +334,7 @@ class _Run:
             if phase == "wear" and self.adaptive:
                 self.jump = self.next_jump(self.state.gap - worn_before, summary, effects.cycle_jump)
             self.history.append(summary)
-            del self.history[:-keep]
+            del self.history[:-loosening_window_blocks(self.history, self.procedure)]
             self.observer.cycle(summary)
             slid = summary.figures["active_slip_area_fraction"] > self.procedure.area_tolerance
             self.quiet_cycles = 0 if slid else self.quiet_cycles + 1

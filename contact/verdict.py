@@ -123,8 +123,26 @@ def verdict(history: list, procedure, stationary: bool, loosened_before: bool = 
     return "damage"
 
 
+def loosening_window_blocks(history: list, procedure) -> int:
+    """How many of the last cycles of ``history`` the loosening window spans: the last
+    ``loosening_window`` blocks, or with ``loosening_window_cycles`` the blocks of the last that
+    many real cycles (at least ``loosening_window`` of them), one block before the window
+    included so that it spans the whole span (a history shorter than the window: all of it)."""
+    span = getattr(procedure, "loosening_window_cycles", None)
+    least = max(procedure.loosening_window, 1)
+    if span is None or not history:
+        return least
+    reach = history[-1].equivalent_cycles - span
+    count = 1
+    while count < len(history) and history[-count].equivalent_cycles > reach:
+        count += 1
+    return max(count, least)
+
+
 def loosening_evident(history: list, procedure) -> bool:
-    """Loosening is evident when, over the last ``loosening_window`` wear cycles, the clamp
+    """Loosening is evident when, over the loosening window (:func:`loosening_window_blocks`:
+    the last ``loosening_window`` wear cycles, or those of the last ``loosening_window_cycles``
+    real cycles), the clamp
     force keeps falling without its rate per real cycle decaying (second half at least 0.8 of
     the first; blocks of an adaptive cycle jump stand for different numbers of cycles),
     by a visible amount (0.5 % of the clamp force), while the stick area shrinks or the
@@ -135,15 +153,19 @@ def loosening_evident(history: list, procedure) -> bool:
     wear_cycles = [c for c in history if c.phase == "wear" and c.clamp_force is not None]
     if len(wear_cycles) < procedure.loosening_window:
         return False
-    recent = wear_cycles[-procedure.loosening_window:]
+    span = getattr(procedure, "loosening_window_cycles", None)
+    if span is not None and wear_cycles[-1].equivalent_cycles - wear_cycles[0].equivalent_cycles < span:
+        return False  # the wear phase does not span the window yet
+    recent = wear_cycles[-loosening_window_blocks(wear_cycles, procedure):]
     force = np.array([c.clamp_force for c in recent])
     stick = np.array([c.figures["stick_area_fraction"] for c in recent])
     real = np.array([c.equivalent_cycles for c in recent])  # blocks of an adaptive jump differ in length
-    middle = len(force) // 2
+    middle = int(np.searchsorted(real, 0.5 * (real[0] + real[-1])))  # halves of equal real duration
+    middle = min(max(middle, 1), len(real) - 2)
     first_rate = (force[0] - force[middle]) / (real[middle] - real[0])
     second_rate = (force[middle] - force[-1]) / (real[-1] - real[middle])
     falling = second_rate > 0.0 and second_rate >= 0.8 * first_rate
     visible = force[0] - force[-1] > 5e-3 * abs(force[0])
-    stick_change = np.polyfit(np.arange(len(stick)), stick, 1)[0] * (len(stick) - 1)
+    stick_change = np.polyfit(real - real[0], stick, 1)[0] * (real[-1] - real[0])
     stick_shrinks = stick_change < -procedure.area_tolerance or stick[-1] <= procedure.area_tolerance
     return bool(falling and visible and stick_shrinks)

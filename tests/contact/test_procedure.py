@@ -3,7 +3,7 @@
 import numpy as np
 
 from contact.procedure import CycleSummary, Procedure
-from contact.verdict import loosening_evident as _loosening, verdict as _verdict
+from contact.verdict import loosening_evident as _loosening, loosening_window_blocks, verdict as _verdict
 
 PROCEDURE = Procedure(loosening_window=10, area_tolerance=0.01)
 
@@ -68,3 +68,33 @@ def test_loosening_evident_earlier_stays_the_verdict_unless_the_joint_shook_down
     assert _verdict(history, PROCEDURE, stationary=False, loosened_before=True) == "loosening"
     stuck = _history(force, np.full(n, 1.0), np.zeros(n))
     assert _verdict(stuck, PROCEDURE, stationary=True, loosened_before=True) == "stick"
+
+
+def _jumped_history(real_cycles, loss_rate, stick_rate):
+    """A wear phase at blocks ending at ``real_cycles``: the clamp force falls by
+    ``loss_rate`` (N per real cycle) and the stick area by ``stick_rate`` (per real cycle)."""
+    real = np.asarray(real_cycles, dtype=float)
+    history = _history(1.0e6 - loss_rate * real, 0.8 - stick_rate * real, 0.2 + stick_rate * real)
+    for summary, cycles in zip(history, real):
+        summary.equivalent_cycles = float(cycles)
+    return history
+
+
+def test_loosening_window_in_real_cycles_does_not_depend_on_the_jump():
+    """The same physical trend (the clamp force falls 1 % per 1e5 real cycles, the stick area
+    shrinks) sampled by coarse blocks (jump 2e4) and fine blocks (jump 1e3, as on a finer mesh):
+    a window of 20 blocks sees a visible loss in the coarse sampling only (20 fine blocks span
+    2e4 cycles, 0.2 % of loss, under the 0.5 % that counts as visible); a window of 2e5 real
+    cycles sees it in both, and holds as many blocks as span it."""
+    coarse = _jumped_history(np.arange(1, 41) * 2.0e4, 0.1, 2.0e-7)
+    fine = _jumped_history(np.arange(1, 401) * 1.0e3, 0.1, 2.0e-7)
+    by_blocks = Procedure(loosening_window=20)
+    assert _loosening(coarse, by_blocks)
+    assert not _loosening(fine, by_blocks)
+    by_cycles = Procedure(loosening_window=5, loosening_window_cycles=2.0e5)
+    assert _loosening(coarse, by_cycles) and _loosening(fine, by_cycles)
+    assert loosening_window_blocks(coarse, by_cycles) == 11  # 10 blocks of 2e4, one before the window
+    assert loosening_window_blocks(fine, by_cycles) == 201
+    assert not _loosening(fine[:150], by_cycles)  # 1.5e5 cycles of wear: the window is not full yet
+    steady = _jumped_history(np.arange(1, 401) * 1.0e3, 0.0, 0.0)
+    assert not _loosening(steady, by_cycles)
