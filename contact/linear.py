@@ -302,19 +302,10 @@ def _krylov_iteration_flops(size: int) -> float:
     return 4.0 * size**2
 
 
-# A blocked LU runs at matrix-matrix speed while a Krylov iteration (a product with the dense
-# Jacobian and two triangular solves) streams its matrices from memory: per flop the LU is
-# several times cheaper. Measured on one core (x86_64, OpenBLAS, float32, 4,776 rows):
-# getrf 0.83 s for 2/3·n³ = 73 GFlop (88 GFlop/s), a product with W 3.4 ms for 2·n² (13
-# GFlop/s), a ratio of 6.5. The policy weighs the two kinds of work by this fixed constant,
-# not by a clock, so that it stays deterministic.
-MATRIX_MATRIX_SPEEDUP = 6.0
-
-
 def _rebuild_flops(size: int) -> float:
     """Forming (2·size²·dim, bounded by 6·size²) and LU-factorising (2/3·size³) the dense
-    bordered Jacobian of ``size`` rows, in flops of matrix-vector speed."""
-    return 2.0 / 3.0 * size**3 / MATRIX_MATRIX_SPEEDUP + 6.0 * size**2
+    bordered Jacobian of ``size`` rows."""
+    return 2.0 / 3.0 * size**3 + 6.0 * size**2
 
 
 def _gmres(matvec, precondition, rhs: np.ndarray, tolerance: float, max_iterations: int):
