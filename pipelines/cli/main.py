@@ -284,6 +284,14 @@ def cmd_convergence(args) -> int:
               f"{1e3 * (f['max_wear_depth_mm'] or 0.0):>11.2f} {_percent(f['clamp_force_loss_fraction']):>12} "
               f"{'-' if f['min_stick_margin'] is None else format(f['min_stick_margin'], '.3f'):>7} "
               f"{'-' if level['limit_mm'] is None else format(1e3 * level['limit_mm'], '.1f'):>9}")
+    if study.get("common_cycles"):
+        print(f"at equal running time, {study['common_cycles']:.4g} real cycles (the shortest run that did not "
+              "shake down):")
+        for level in sorted(study["levels"], key=lambda level: -level["size_mm"]):
+            f = level["extra"]["at_common_cycles"]
+            print(f"{level['size_mm']:>8g} {'':>7} {'':>10} {_percent(f['stick_area_fraction']):>8} "
+                  f"{_percent(f['active_slip_area_fraction']):>9} {_percent(f['worn_area_fraction']):>7} "
+                  f"{1e3 * (f['max_wear_depth_mm'] or 0.0):>11.2f} {_percent(f['clamp_force_loss_fraction']):>12}")
     converged = study["converged_size_mm"]
     print("converged at " + (f"{converged:g} mm (its verdict equals the next finer level's)" if converged else
                              "no size: the verdict changes down to the finest level run"))

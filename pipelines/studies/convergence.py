@@ -121,7 +121,7 @@ def run_level(scene_path: str, size_mm: float, out_dir: str, cache_dir: str | No
     with h5py.File(outcome.results_path, "r") as results:
         points = int(results["points/area"].shape[0])
     level = Level(size_mm, summary["verdict"], {k: summary.get(k) for k in FIGURES}, points=points,
-                  wall_time_s=time.perf_counter() - clock)
+                  wall_time_s=time.perf_counter() - clock, extra={"results": str(outcome.results_path)})
     if limit_range_mm is not None:
         from pipelines.jobs.limit import find_limit
 
@@ -149,9 +149,60 @@ def convergence_study(scene_path, sizes_mm, out_dir, *, cache_dir=None, limit_ra
     if failed:
         raise InputError("the convergence study could not run every level: " + "; ".join(failed))
     levels = [o.value for o in outcomes]
+    horizon = common_horizon(levels)
     return {"scene": str(scene_path), "levels": [asdict(level) for level in levels],
             "extrapolated": extrapolations(levels), "converged_size_mm": converged_size(levels),
-            "verdicts_agree": len({level.verdict for level in levels}) == 1}
+            "verdicts_agree": len({level.verdict for level in levels}) == 1, "common_cycles": horizon}
+
+
+def figures_at_cycles(results_path, cycles: float) -> dict:
+    """The figures (:data:`FIGURES`) of a run's last cycle at or before ``cycles`` real cycles,
+    from its results.h5; a run that shook down earlier keeps its last figures (a stuck joint
+    stays as it is). The clamp-force loss is relative to the clamp force the run's own loss
+    refers to."""
+    import numpy as np
+
+    with h5py.File(results_path, "r") as results:
+        import json
+
+        final = json.loads(results["summary"].attrs["figures"])
+        table = results["cycles"]
+        real = table["equivalent_cycles"][()]
+        row = max(int(np.searchsorted(real, cycles * (1.0 + 1e-12), side="right")) - 1, 0)
+        stored = {name: table["figures"][name][()] for name in table["figures"]}
+    out = {name: float(stored[name][row]) if name in stored else final.get(name) for name in FIGURES}
+    out["equivalent_cycles"] = float(real[row])
+    loss = final.get("clamp_force_loss_fraction")
+    clamp = stored.get("clamp_force_N")
+    if loss is not None and clamp is not None and loss < 1.0:
+        initial = float(clamp[-1]) / (1.0 - loss)
+        out["clamp_force_loss_fraction"] = 1.0 - float(clamp[row]) / initial
+    if "min_stick_margin" in stored and not np.isfinite(stored["min_stick_margin"][row]):
+        out["min_stick_margin"] = None
+    return out
+
+
+def common_horizon(levels: list[Level]) -> float | None:
+    """Compare the levels at equal engine running time: the fewest real cycles any level's
+    run reached without shaking down (a wear budget of blocks ends at fewer real cycles on a
+    finer mesh, whose adaptive jump is smaller). Adds each level's figures there to
+    ``extra["at_common_cycles"]``; None (nothing added) when the runs already end together or
+    shook down."""
+    ends = {}
+    for level in levels:
+        path = level.extra.get("results")
+        if path is None:
+            return None
+        with h5py.File(path, "r") as results:
+            ending = str(results.attrs.get("ending", "completed"))
+        if ending != "shakedown":
+            ends[level.size_mm] = level.figures.get("equivalent_cycles") or 0.0
+    if len(ends) < 2 or max(ends.values()) <= min(ends.values()) * (1.0 + 1e-6):
+        return None
+    horizon = min(ends.values())
+    for level in levels:
+        level.extra["at_common_cycles"] = figures_at_cycles(level.extra["results"], horizon)
+    return horizon
 
 
 def plot_convergence(study: dict, path: Path) -> Path:
@@ -168,13 +219,18 @@ def plot_convergence(study: dict, path: Path) -> Path:
     found = [(level["size_mm"], 1e3 * level["limit_mm"]) for level in levels if level["limit_mm"] is not None]
     figure, axes = plt.subplots(2 if found else 1, 1, figsize=(7, 6 if found else 3.6), sharex=True, squeeze=False)
     areas = axes[0, 0]
+    common = study.get("common_cycles")
     for name, label, scale in shown:
-        values = [scale * (level["figures"].get(name) or 0.0) for level in levels]
+        values = [scale * ((level["extra"]["at_common_cycles"] if common else level["figures"]).get(name) or 0.0)
+                  for level in levels]
         areas.plot(sizes, values, marker="o", label=label)
     for level in levels:
         areas.annotate(level["verdict"], (level["size_mm"], 0), textcoords="offset points", xytext=(0, 4),
                        ha="center", fontsize=8)
     areas.set_ylabel("% of nominal area\nor of clamp force")
+    if common:
+        areas.set_title(f"figures at {common:.3g} real cycles, the shortest run that did not shake down "
+                        "(verdicts: whole runs)", fontsize=8)
     areas.legend(fontsize=8)
     if found:
         limits = axes[1, 0]

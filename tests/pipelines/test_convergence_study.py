@@ -89,3 +89,47 @@ def test_bad_sizes_are_one_message(coarse_cylinder, sizes, capsys):
 
     assert main(["study", "convergence", str(coarse_cylinder), "--sizes", sizes]) == 2
     assert "--sizes" in capsys.readouterr().err
+
+
+def _results(path, real_cycles, clamp, worn, ending, loss):
+    """A minimal results.h5: the cycles table (real cycles, clamp force N, worn area) and the summary."""
+    import json
+
+    import h5py
+    import numpy as np
+
+    with h5py.File(path, "w") as results:
+        results.attrs["ending"] = ending
+        table = results.create_group("cycles")
+        table["equivalent_cycles"] = np.asarray(real_cycles, dtype=float)
+        table["figures/clamp_force_N"] = np.asarray(clamp, dtype=float)
+        table["figures/worn_area_fraction"] = np.asarray(worn, dtype=float)
+        results.create_group("summary").attrs["figures"] = json.dumps(
+            {"clamp_force_loss_fraction": loss, "worn_area_fraction": worn[-1], "equivalent_cycles": real_cycles[-1]})
+    return str(path)
+
+
+def test_levels_are_compared_at_equal_running_time(tmp_path):
+    """A coarse level whose 4 blocks reach 4e6 real cycles, a fine one whose 4 smaller blocks reach
+    2e6: both are compared at 2e6 cycles (the coarse one's figures of its block ending there),
+    with the clamp-force loss relative to each run's own initial clamp (1000 N); a level that
+    shook down early keeps its last figures and does not shorten the horizon."""
+    from pipelines.studies.convergence import Level, common_horizon
+
+    coarse = _results(tmp_path / "c.h5", [1e6, 2e6, 3e6, 4e6], [990, 980, 970, 960], [0.1, 0.2, 0.3, 0.4],
+                      "completed", 0.04)
+    fine = _results(tmp_path / "f.h5", [5e5, 1e6, 1.5e6, 2e6], [995, 990, 985, 980], [0.1, 0.15, 0.2, 0.25],
+                    "completed", 0.02)
+    stuck = _results(tmp_path / "s.h5", [10.0, 20.0], [1000, 1000], [0.0, 0.0], "shakedown", 0.0)
+    levels = [Level(10.0, "loosening", {"equivalent_cycles": 4e6}, extra={"results": coarse}),
+              Level(5.0, "loosening", {"equivalent_cycles": 2e6}, extra={"results": fine}),
+              Level(2.5, "stick", {"equivalent_cycles": 20.0}, extra={"results": stuck})]
+    assert common_horizon(levels) == 2e6
+    at = [level.extra["at_common_cycles"] for level in levels]
+    assert at[0]["equivalent_cycles"] == 2e6 and abs(at[0]["clamp_force_loss_fraction"] - 0.02) < 1e-12
+    assert at[0]["worn_area_fraction"] == 0.2 and at[1]["worn_area_fraction"] == 0.25
+    assert abs(at[1]["clamp_force_loss_fraction"] - 0.02) < 1e-12
+    assert at[2]["equivalent_cycles"] == 20.0 and at[2]["clamp_force_loss_fraction"] == 0.0
+    together = [Level(10.0, "damage", {"equivalent_cycles": 2e6}, extra={"results": fine}),
+                Level(5.0, "damage", {"equivalent_cycles": 2e6}, extra={"results": fine})]
+    assert common_horizon(together) is None and "at_common_cycles" not in together[0].extra
