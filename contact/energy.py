@@ -40,7 +40,8 @@ class WorkOperators:
 
     With r = n_patterns + n_prescribed + n_control columns: ``BtY`` = Bᵀ·K_cc⁻¹·B (r, r),
     ``GY`` = G_c·K_cc⁻¹·B (n_rows, r); the control and prescribed stiffness blocks; the load
-    patterns on control DOFs (prescribed DOFs excluded: there the reaction is the force).
+    patterns on control and on prescribed DOFs (body loads have a share there: the support's
+    reaction is the internal force less it).
     """
 
     def __init__(self, space: ContactSpace):
@@ -57,7 +58,7 @@ class WorkOperators:
         self.n_patterns, self.n_prescribed = len(patterns), p.size
         self.BtY = 0.5 * (B.T @ Y + Y.T @ B)
         self.GY = np.asarray(space.Gc @ Y)
-        self.load_q = loads[q]
+        self.load_q, self.load_p = loads[q], loads[p]
         self.Kqq, self.Kqp, self.Kpp = dense_block(K, q, q), dense_block(K, q, p), dense_block(K, p, p)
         contact_p = structure.contact_operator[:, p]
         self.Gp = contact_p.T.tocsr() if contact_p.nnz else None
@@ -65,8 +66,8 @@ class WorkOperators:
         self.motion = space.pattern_motion
 
     def work_terms(self, control: np.ndarray, forces: np.ndarray, amplitudes: np.ndarray):
-        """(ℓ = L_freeᵀ·u per pattern (mm·N per unit amplitude), reaction forces at the
-        prescribed DOFs (N), u_p (mm), strain energy ½·uᵀ·K·u (mJ)) of an equilibrium."""
+        """(ℓ = Lᵀ·u per pattern (mm·N per unit amplitude), reaction forces of the supports at
+        the prescribed DOFs (N), u_p (mm), strain energy ½·uᵀ·K·u (mJ)) of an equilibrium."""
         u_p = self.motion @ amplitudes
         s = np.concatenate([amplitudes, -u_p, -control])
         Bt_u = self.BtY @ s - self.GY.T @ forces  # [L_cᵀ·u_c, K_pc·u_c, K_qc·u_c]
@@ -75,10 +76,10 @@ class WorkOperators:
         G_u = self.GY @ s - self.compliance(forces)  # G_c·u_c
         strain = (Bt_u @ s - G_u @ forces + 2.0 * (Kqc_u @ control + Kpc_u @ u_p)
                   + control @ self.Kqq @ control + 2.0 * control @ self.Kqp @ u_p + u_p @ self.Kpp @ u_p)
-        reaction = Kpc_u + self.Kqp.T @ control + self.Kpp @ u_p
+        reaction = Kpc_u + self.Kqp.T @ control + self.Kpp @ u_p - self.load_p @ amplitudes
         if self.Gp is not None:
             reaction = reaction + self.Gp @ forces
-        return load_u + self.load_q.T @ control, reaction, u_p, 0.5 * float(strain)
+        return load_u + self.load_q.T @ control + self.load_p.T @ u_p, reaction, u_p, 0.5 * float(strain)
 
 
 @dataclass
@@ -163,7 +164,7 @@ class EnergyMeter:
         # where the solver's initial equilibrium is: its work counts like any other.
         last_a, last_loads_u, last_reaction, last_u_p = self._last or (
             np.zeros_like(amplitudes), np.zeros_like(loads_u), np.zeros_like(reaction), np.zeros_like(u_p))
-        # ½(F₁ + F₀)·(u₁ − u₀) with F = Σ a_k·L_k off the prescribed DOFs, the reaction on them.
+        # ½(F₁ + F₀)·(u₁ − u₀) with F = Σ a_k·L_k, plus the supports' reactions on the prescribed DOFs.
         self.external_work += 0.5 * float((amplitudes + last_a) @ (loads_u - last_loads_u)
                                           + (reaction + last_reaction) @ (u_p - last_u_p))
         gap = np.asarray(state.gap, dtype=float)
