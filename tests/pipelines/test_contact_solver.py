@@ -135,6 +135,7 @@ def test_auto_picks_the_path_by_the_point_count(monkeypatch, threshold, path):
     assert isinstance(model.contact_space(), contact.sparse.SparseContactSpace) == (path == "sparse")
 
 
+@pytest.mark.filterwarnings("ignore:pypardiso")  # the dense build's fallback says so
 def test_a_bad_or_unavailable_solver_is_an_input_error(monkeypatch):
     with pytest.raises(InputError, match="contact.solver"):
         scenes.load(SCENE, {"contact.solver": "fast"})
