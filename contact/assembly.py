@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
 from contact.bolts import BoltSet, bolt_vector, pretension_pattern
 from contact.interface import Pairing, Surface, kinematic_operator, pair_surfaces, surface_from_facets
@@ -104,7 +105,8 @@ def component_names(dim: int, rotations: bool) -> list[str]:
     return names
 
 
-def _condense_body(body: Body, surface: Surface | None, offset: int, condenser=None) -> CondensedBody:
+def _condense_body(body: Body, surface: Surface | None, offset: int, condenser=None,
+                   keep_interior: bool = False) -> CondensedBody:
     elastic = body.elastic
     stiffness = elastic.stiffness
     coupling = None
@@ -140,7 +142,9 @@ def _condense_body(body: Body, surface: Surface | None, offset: int, condenser=N
     fixed = fixed[~on_surface]
     loads = {name: vector if coupling is None else coupling.reduce_vector(vector)
              for name, vector in body.body_loads.items()}
-    if condenser is None:
+    if keep_interior:
+        condensation = _kept_whole(stiffness, retained, fixed, loads)
+    elif condenser is None:
         condensation = condense(stiffness, retained, fixed, loads or None)
     else:
         transformation = None if coupling is None else coupling.transformation
@@ -152,11 +156,30 @@ def _condense_body(body: Body, surface: Surface | None, offset: int, condenser=N
     return CondensedBody(body, coupling, condensation, offset, reference_dofs, held)
 
 
+def _kept_whole(stiffness, first: np.ndarray, fixed: np.ndarray, loads: dict) -> Condensation:
+    """A body kept whole in the shape of a :class:`Condensation`: every DOF not fixed is
+    retained, ``first`` (contact surface, reference points) in front as condensing would
+    retain them, then the interior in order; the stiffness (N/mm) stays sparse (CSR) and the
+    loads (N) are the body's own, nothing condensed."""
+    matrix = sp.csr_matrix(stiffness)
+    rest = np.ones(matrix.shape[0], dtype=bool)
+    rest[first] = False
+    rest[fixed] = False
+    retained = np.concatenate([first, np.flatnonzero(rest)]).astype(int)
+    return Condensation(retained=retained, stiffness=matrix[retained][:, retained].tocsr(),
+                        loads={name: np.asarray(vector, dtype=float)[retained] for name, vector in loads.items()},
+                        interior=np.zeros(0, dtype=int), fixed=np.asarray(fixed, dtype=int),
+                        n_dofs=matrix.shape[0], solver="none", interior_loads={},
+                        interior_retained_coupling=sp.csr_matrix((0, retained.size)),
+                        solve_interior=lambda rhs: rhs)
+
+
 def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[str, np.ndarray], *,
              loads: dict | None = None, motions: dict | None = None,
              search_distance: float = np.inf,
              initial_gap: np.ndarray | None = None, bolts: tuple = (),
-             pairing: str = "auto", condensers: dict | None = None) -> Assembly:
+             pairing: str = "auto", condensers: dict | None = None,
+             keep_interior: bool = False) -> Assembly:
     """Condense the bodies and pair ``slave`` = (body name, facet indices) with ``master``.
 
     loads / motions: pattern name → list of (body, reference point, component, value);
@@ -169,9 +192,13 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     condensers: body name → callable (stiffness, transformation, retained, fixed, loads) →
     Condensation used instead of :func:`reduction.condensation.condense` (a body whose
     factorisation is shared with another load case, :class:`pipelines.coupling.SharedCondenser`).
+    keep_interior: keep every body whole instead (:func:`reduction.condensation.kept_whole`:
+    the contact surface and reference DOFs first, as condensed, then the interior); the
+    structure's stiffness is then sparse, for :class:`contact.sparse.SparseContactSpace`.
+    Condensers do not apply then.
     """
     surfaces = _contact_surfaces(bodies, slave, master)
-    condensed, n = _condense_bodies(bodies, surfaces, condensers or {})
+    condensed, n = _condense_bodies(bodies, surfaces, {} if keep_interior else (condensers or {}), keep_interior)
     stiffness = _block_stiffness(condensed, n)
     pairing = pair_with_gap(surfaces[slave[0]], surfaces[master[0]], search_distance, initial_gap, pairing)
     dim = pairing.normal.shape[1]
@@ -205,19 +232,23 @@ def _contact_surfaces(bodies: list[Body], slave: tuple[str, np.ndarray],
     return surfaces
 
 
-def _condense_bodies(bodies: list[Body], surfaces: dict[str, Surface],
-                     condensers: dict) -> tuple[dict[str, CondensedBody], int]:
+def _condense_bodies(bodies: list[Body], surfaces: dict[str, Surface], condensers: dict,
+                     keep_interior: bool = False) -> tuple[dict[str, CondensedBody], int]:
     """Condense each body in order; returns body name → condensed body and the total DOF count."""
     condensed, offset = {}, 0
     for body in bodies:
-        item = _condense_body(body, surfaces.get(body.name), offset, condensers.get(body.name))
+        item = _condense_body(body, surfaces.get(body.name), offset, condensers.get(body.name), keep_interior)
         condensed[body.name] = item
         offset += item.size
     return condensed, offset
 
 
-def _block_stiffness(condensed: dict[str, CondensedBody], n: int) -> np.ndarray:
-    """(n, n) block-diagonal stiffness of the condensed bodies, N/mm."""
+def _block_stiffness(condensed: dict[str, CondensedBody], n: int) -> np.ndarray | sp.csr_matrix:
+    """(n, n) block-diagonal stiffness of the condensed bodies, N/mm: dense, or sparse CSR when
+    the bodies were kept whole."""
+    blocks = [item.condensation.stiffness for item in condensed.values()]
+    if any(sp.issparse(block) for block in blocks):
+        return sp.block_diag(blocks, format="csr")
     stiffness = np.zeros((n, n))
     for item in condensed.values():
         index = slice(item.offset, item.offset + item.size)

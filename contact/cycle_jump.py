@@ -57,6 +57,13 @@ class AdaptiveJump:
             raise ValueError("the jump needs initial >= 1, growth >= 1 and maximum >= initial")
 
 
+def local_stiffness(normal_compliance: np.ndarray, area: np.ndarray, normal_stiffness) -> np.ndarray:
+    """Pressure per mm of gap of each point alone (N/mm³): the penalty kn (N/mm³) in series
+    with the bodies' own compliance there, 1/(1/kn + W_ii·A_i); normal_compliance: W's normal
+    diagonal W_ii (mm/N, ``space.normal_compliance()``), area: A_i (mm²)."""
+    return 1.0 / (1.0 / np.asarray(normal_stiffness) + np.asarray(normal_compliance) * area)
+
+
 def wear_rate(wear_in_block: np.ndarray, jump: float) -> np.ndarray:
     """Wear per real cycle (mm) of each point, from the wear a block of jump J added (mm)."""
     return np.asarray(wear_in_block, dtype=float) / jump

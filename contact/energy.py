@@ -11,7 +11,7 @@ Neither needs the displacement field: with the contact DOFs c eliminated,
 u_c = K_cc⁻¹·(B·s − G_cᵀ·λ), B = [L_c, K_cp, K_cq], s = [a, −u_p, −q] (a the pattern
 amplitudes, L the load patterns), so every product of u_c with a load or a coupling block is
 a product of precomputed compliances K_cc⁻¹·B with s and λ, and the only product of size
-n² left is λᵀ·W·λ. The per-increment cost is then that of one multiplication by W instead
+n² left is λᵀ·W·λ (with sparse bodies, :mod:`contact.sparse`, one solve). The per-increment cost is then that of one multiplication by W instead
 of a solve with the bodies' contact stiffness and a product with their full condensed
 stiffness (10 % of a counterweight run's time before).
 
@@ -32,7 +32,7 @@ import numpy as np
 from contact.law import ContactLaw, ContactState
 from contact.procedure import IncrementRecord, Observer
 from contact.solver import Equilibrium
-from contact.structure import ContactSpace
+from contact.structure import ContactSpace, dense_block
 
 
 class WorkOperators:
@@ -40,7 +40,8 @@ class WorkOperators:
 
     With r = n_patterns + n_prescribed + n_control columns: ``BtY`` = Bᵀ·K_cc⁻¹·B (r, r),
     ``GY`` = G_c·K_cc⁻¹·B (n_rows, r); the control and prescribed stiffness blocks; the load
-    patterns on control DOFs (prescribed DOFs excluded: there the reaction is the force).
+    patterns on control and on prescribed DOFs (body loads have a share there: the support's
+    reaction is the internal force less it).
     """
 
     def __init__(self, space: ContactSpace):
@@ -52,33 +53,33 @@ class WorkOperators:
         for k, name in enumerate(patterns):
             if name in structure.loads:
                 loads[:, k] = structure.loads[name]
-        B = np.hstack([loads[c], K[np.ix_(c, p)], K[np.ix_(c, q)]])
+        B = np.hstack([loads[c], dense_block(K, c, p), dense_block(K, c, q)])
         Y = space.solve_contact_block(B)
         self.n_patterns, self.n_prescribed = len(patterns), p.size
         self.BtY = 0.5 * (B.T @ Y + Y.T @ B)
         self.GY = np.asarray(space.Gc @ Y)
-        self.load_q = loads[q]
-        self.Kqq, self.Kqp, self.Kpp = K[np.ix_(q, q)], K[np.ix_(q, p)], K[np.ix_(p, p)]
+        self.load_q, self.load_p = loads[q], loads[p]
+        self.Kqq, self.Kqp, self.Kpp = dense_block(K, q, q), dense_block(K, q, p), dense_block(K, p, p)
         contact_p = structure.contact_operator[:, p]
         self.Gp = contact_p.T.tocsr() if contact_p.nnz else None
-        self.W = space.W
+        self.compliance = space.compliance  # W·λ (dense or sparse space)
         self.motion = space.pattern_motion
 
     def work_terms(self, control: np.ndarray, forces: np.ndarray, amplitudes: np.ndarray):
-        """(ℓ = L_freeᵀ·u per pattern (mm·N per unit amplitude), reaction forces at the
-        prescribed DOFs (N), u_p (mm), strain energy ½·uᵀ·K·u (mJ)) of an equilibrium."""
+        """(ℓ = Lᵀ·u per pattern (mm·N per unit amplitude), reaction forces of the supports at
+        the prescribed DOFs (N), u_p (mm), strain energy ½·uᵀ·K·u (mJ)) of an equilibrium."""
         u_p = self.motion @ amplitudes
         s = np.concatenate([amplitudes, -u_p, -control])
         Bt_u = self.BtY @ s - self.GY.T @ forces  # [L_cᵀ·u_c, K_pc·u_c, K_qc·u_c]
         k, n_p = self.n_patterns, self.n_prescribed
         load_u, Kpc_u, Kqc_u = Bt_u[:k], Bt_u[k:k + n_p], Bt_u[k + n_p:]
-        G_u = self.GY @ s - self.W @ forces  # G_c·u_c
+        G_u = self.GY @ s - self.compliance(forces)  # G_c·u_c
         strain = (Bt_u @ s - G_u @ forces + 2.0 * (Kqc_u @ control + Kpc_u @ u_p)
                   + control @ self.Kqq @ control + 2.0 * control @ self.Kqp @ u_p + u_p @ self.Kpp @ u_p)
-        reaction = Kpc_u + self.Kqp.T @ control + self.Kpp @ u_p
+        reaction = Kpc_u + self.Kqp.T @ control + self.Kpp @ u_p - self.load_p @ amplitudes
         if self.Gp is not None:
             reaction = reaction + self.Gp @ forces
-        return load_u + self.load_q.T @ control, reaction, u_p, 0.5 * float(strain)
+        return load_u + self.load_q.T @ control + self.load_p.T @ u_p, reaction, u_p, 0.5 * float(strain)
 
 
 @dataclass
@@ -163,7 +164,7 @@ class EnergyMeter:
         # where the solver's initial equilibrium is: its work counts like any other.
         last_a, last_loads_u, last_reaction, last_u_p = self._last or (
             np.zeros_like(amplitudes), np.zeros_like(loads_u), np.zeros_like(reaction), np.zeros_like(u_p))
-        # ½(F₁ + F₀)·(u₁ − u₀) with F = Σ a_k·L_k off the prescribed DOFs, the reaction on them.
+        # ½(F₁ + F₀)·(u₁ − u₀) with F = Σ a_k·L_k, plus the supports' reactions on the prescribed DOFs.
         self.external_work += 0.5 * float((amplitudes + last_a) @ (loads_u - last_loads_u)
                                           + (reaction + last_reaction) @ (u_p - last_u_p))
         gap = np.asarray(state.gap, dtype=float)

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from contact.cycle_jump import AdaptiveJump, next_jump, wear_rate
+from contact.cycle_jump import AdaptiveJump, local_stiffness, next_jump, wear_rate
 from contact.law import ContactState, Status, utilised_cof
 from contact.solver import ContactSolver, ConvergenceError, Effects, Equilibrium
 from contact.verdict import (Ending, active_slip_area_fraction, cycle_figures, loosening_evident,
@@ -363,10 +363,8 @@ class _Run:
         """Pressure per mm of gap of each point alone (N/mm³): the penalty kn in series with the
         bodies' own compliance there, 1/(1/kn + W_ii·A_i) (W's normal diagonal, mm/N)."""
         if self._local_stiffness is None:
-            space = self.solver.space
-            dim = space.n_rows // self.solver.n_points
-            compliance = np.diagonal(space.W)[0::dim] * self.solver.area
-            self._local_stiffness = 1.0 / (1.0 / np.asarray(self.solver.law.normal_stiffness) + compliance)
+            self._local_stiffness = local_stiffness(self.solver.space.normal_compliance(), self.solver.area,
+                                                    self.solver.law.normal_stiffness)
         return self._local_stiffness
 
     def snapshot(self, phase_index, cycles_in_phase) -> Snapshot:

@@ -35,6 +35,7 @@ from contact.interface import Pairing, kinematic_operator, pair_surfaces
 from contact.law import ContactLaw, ContactState
 from contact.mortar import facet_measures
 from contact.solver import ContactSolver, Effects, Equilibrium, NewtonSettings
+from contact.sparse import space_of
 from contact.structure import ContactSpace
 from reduction.errors import InputError
 
@@ -180,8 +181,11 @@ class SlidingSolver:
             G = kinematic_operator(pairing, self._dofs["slave"], self._dofs["master"], structure.n_dofs)
             structure = replace(structure, contact_operator=G, area=pairing.area,
                                 initial_overclosure=pairing.initial_overclosure)
+        if space is None:
+            # the same bodies (dense or sparse) with the new pairing; their factors are kept
+            space = self.solver.space.repaired(structure) if hasattr(self, "solver") else space_of(structure)
         self.pairing, self.paired_at = pairing, displacement
-        self.solver = ContactSolver(space or ContactSpace(structure), self.law, self.settings)
+        self.solver = ContactSolver(space, self.law, self.settings)
         self.element_size = _element_size(pairing)
         for listener in self.listeners:
             listener(self.solver.space)

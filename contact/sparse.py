@@ -2,15 +2,17 @@
 
 The dense path (:class:`contact.structure.ContactSpace`) condenses every body onto its
 surface and forms the contact compliance W = G·K⁻¹·Gᵀ: both grow as n² (10,000 points in 3D:
-a 60,000² condensed stiffness and a 30,000² W, 29 GB and 7 GB). Here the bodies keep their
-interior, sparse, in the numbering of :func:`contact.full_model.build`. The free DOFs split
-into the control DOFs q (reference points that no contact row touches) and all others, a
-(interior and contact surfaces). The contact-space equations of the dense path are the same,
+a 60,000² condensed stiffness and a 30,000² W, 29 GB and 7 GB). Here the bodies are kept
+whole and sparse (:func:`contact.assembly.assemble` with ``keep_interior``: the same
+couplings, supports, bolts, body loads, pairing and held surface DOFs as the condensed
+assembly, only nothing condensed). The free DOFs split into the control DOFs q (reference
+points that no contact row touches) and all others, c (interior and contact surfaces). The
+elimination is that of the dense path (:class:`contact.structure.ContactSpace`, shared):
 
     g − g_f + E·q + W·λ(g) = 0,       S_q·q − Eᵀ·λ(g) − f_q = 0,
 
-with W·λ = G·K_aa⁻¹·Gᵀ·λ evaluated by one solve with a sparse Cholesky factor of K_aa
-(formed once), and E = G·K_aa⁻¹·K_aq, S_q = K_qq − K_qa·K_aa⁻¹·K_aq formed with one solve
+with W·λ = G·K_cc⁻¹·Gᵀ·λ evaluated by one solve with a sparse Cholesky factor of K_cc
+(formed once), and E = G·K_cc⁻¹·K_cq, S_q = K_qq − K_qc·K_cc⁻¹·K_cq formed with one solve
 per control DOF. So the solver's residuals, line search and convergence test are those of
 the dense path, and so are its answers.
 
@@ -18,7 +20,7 @@ A Newton correction solves J·[x, y] = [b, c] with J = [[I + W·B, E], [−Eᵀ�
 block-diagonal tangent A·D of :mod:`contact.linear`). Writing x = b + G·w, it is exactly the
 sparse system of the uncondensed tangent (the full model's Newton matrix):
 
-    [[K_aa + Gᵀ·B·G, K_aq], [K_qa, K_qq]]·[w, y] = [−Gᵀ·B·b, c].
+    [[K_cc + Gᵀ·B·G, K_cq], [K_qc, K_qq + K_bolts]]·[w, y] = [−Gᵀ·B·b, c].
 
 That matrix changes with the tangent; it is solved by GMRES preconditioned with a sparse
 Cholesky factor (MKL PARDISO, single precision) of K + Gᵀ·B₀·G, B₀ the diagonal of an earlier
@@ -36,16 +38,16 @@ from __future__ import annotations
 
 import ctypes
 import weakref
-from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
-from contact.full_model import FullModel, TangentAssembler
+from contact.full_model import TangentAssembler
 from contact.linear import KrylovCounters, KrylovSettings, _gmres
+from contact.structure import ContactSpace, Structure
 from reduction import pardiso
+from reduction.errors import InputError
 from reduction.factorization import factorize
-from reduction.threads import single_threaded_blas
 
 #: contact points from which the sparse path is chosen (3D), set by memory, measured with
 #: the flat-on-flat benchmark (tests/bench/test_bench_scale.py): the dense path's set-up needs
@@ -55,6 +57,8 @@ from reduction.threads import single_threaded_blas
 #: per-increment cost growing as n² against about n for the sparse one.
 SPARSE_FROM_POINTS = 2500
 
+#: the choices of ``[contact] solver``
+PATHS = ("auto", "dense", "sparse")
 
 #: how many times faster per flop a factorisation runs than a solve (dense BLAS3 blocks
 #: against a memory-bound substitution): the rebuild's work in solve flops is its flops over
@@ -63,25 +67,51 @@ SPARSE_FROM_POINTS = 2500
 #: history, 0.31 s per increment), 3 gives 301 and 0.27 s, 10 rebuilds too often (0.33 s).
 FACTOR_FLOP_RATE = 3.0
 
+#: the relative GMRES tolerance of the last Newton steps at most (KrylovSettings.final_tolerance
+#: is 1e-7): there the inexact correction sets where Newton stops inside its tolerance, and a
+#: run should end where the dense path's exact LU ends. Measured on the bolted blocks
+#: (tests/pipelines/test_contact_solver.py): 1e-7 leaves 2.4e-8 of the dissipation per cycle,
+#: 1e-9 less than 1e-8 of every field, for a few more Krylov iterations in the last steps.
+FINAL_TOLERANCE = 1e-9
+
+#: right-hand sides per solve when W's normal diagonal is formed: bounds the dense block to
+#: this many floats (160 MB)
+_DIAGONAL_BLOCK_FLOATS = 20_000_000
+
 
 def choose_path(n_points: int, dim: int) -> str:
     """"dense" or "sparse" for an interface of ``n_points`` contact points in ``dim`` D."""
     return "sparse" if dim == 3 and n_points >= SPARSE_FROM_POINTS else "dense"
 
 
-def contact_space(bodies: list, slave: tuple, master: tuple, *, loads: dict | None = None,
-                  motions: dict | None = None, path: str = "auto"):
-    """The contact space of bodies and a surface pair (the arguments of
-    :func:`contact.assembly.assemble`) on the ``path`` "dense" (condensed bodies, dense W),
-    "sparse" (this module) or "auto" (:func:`choose_path` by the slave surface's node count,
-    one contact point per node). Returns (space, path taken)."""
-    from contact.assembly import assemble
-    from contact.full_model import build
-    from contact.interface import surface_from_facets
-    from contact.structure import ContactSpace
-    from reduction.errors import InputError
+def decide_path(asked: str, n_points: int, dim: int) -> tuple[str, str]:
+    """(path, why) for the ``[contact] solver`` choice ``asked`` ("auto", "dense" or "sparse")
+    and an interface of ``n_points`` contact points in ``dim`` D; why, in words for a run
+    summary, e.g. "2,704 points ≥ 2,500"."""
+    if asked not in PATHS:
+        raise InputError(f"contact solver must be one of {', '.join(PATHS)}, got {asked!r}")
+    path = choose_path(n_points, dim) if asked == "auto" else asked
+    if path == "sparse" and not pardiso.available():
+        raise InputError(f"the sparse contact solver ({n_points:,} points) needs MKL PARDISO, which is not "
+                         "installed (pip install pypardiso); or set [contact] solver = \"dense\"")
+    if asked != "auto":
+        return asked, f"asked for, {n_points:,} points"
+    if dim != 3:
+        return path, f"{n_points:,} points in {dim}D"
+    sign = "≥" if path == "sparse" else "<"
+    return path, f"{n_points:,} points {sign} {SPARSE_FROM_POINTS:,}"
 
-    if path not in ("auto", "dense", "sparse"):
+
+def contact_space(bodies: list, slave: tuple, master: tuple, *, loads: dict | None = None,
+                  motions: dict | None = None, path: str = "auto", **assembly):
+    """The contact space of bodies and a surface pair (the arguments of
+    :func:`contact.assembly.assemble`, ``assembly`` the further ones) on the ``path`` "dense"
+    (condensed bodies, dense W), "sparse" (this module) or "auto" (:func:`choose_path` by the
+    slave surface's node count, one contact point per node). Returns (space, path taken)."""
+    from contact.assembly import assemble
+    from contact.interface import surface_from_facets
+
+    if path not in PATHS:
         raise InputError(f"contact path must be auto, dense or sparse, got {path!r}")
     if path == "auto":
         body = next((b for b in bodies if b.name == slave[0]), None)
@@ -89,93 +119,63 @@ def contact_space(bodies: list, slave: tuple, master: tuple, *, loads: dict | No
             raise InputError(f"slave surface names body {slave[0]!r}, which is not defined")
         surface = surface_from_facets(body.elastic.mesh, slave[1], f"{slave[0]} surface")
         path = choose_path(surface.nodes.size, body.elastic.dim)
-    if path == "sparse":
-        return SparseContactSpace(build(bodies, slave, master, loads=loads, motions=motions)), path
-    return ContactSpace(assemble(bodies, slave, master, loads=loads, motions=motions).structure), path
+    structure = assemble(bodies, slave, master, loads=loads, motions=motions, keep_interior=path == "sparse",
+                         **assembly).structure
+    return space_of(structure), path
 
 
-@dataclass(frozen=True)
-class SparseInterface:
-    """What the solver reads of an interface's structure (the :class:`contact.structure.Structure`
-    fields it uses): dim, area (n_points,) mm², initial_overclosure (n_points,) mm and the
-    pattern names (loads, then motions)."""
-
-    dim: int
-    area: np.ndarray
-    initial_overclosure: np.ndarray
-    patterns: tuple
-
-    @property
-    def n_points(self) -> int:
-        return self.area.size
+def space_of(structure: Structure) -> ContactSpace:
+    """The contact space of a structure: :class:`SparseContactSpace` for bodies kept whole
+    (sparse stiffness), else the dense :class:`contact.structure.ContactSpace`."""
+    return SparseContactSpace(structure) if sp.issparse(structure.stiffness) else ContactSpace(structure)
 
 
-class SparseContactSpace:
-    """Contact-space operators of a :class:`contact.full_model.FullModel`, W kept implicit.
+class SparseContactSpace(ContactSpace):
+    """Contact-space operators of a structure whose bodies are kept whole, W kept implicit.
 
-    The interface of :class:`contact.structure.ContactSpace` that the Newton solver uses:
-    E (n_rows, n_control) mm/mm, S_q (n_control, n_control) N/mm, ``driving``,
-    ``compliance`` (W·λ) and ``linear_solver``.
+    The interface of :class:`contact.structure.ContactSpace` (E (n_rows, n_control) mm/mm,
+    S_q (n_control, n_control) N/mm, ``driving``, ``compliance`` (W·λ), ``displacements``,
+    ``normal_compliance``, ``linear_solver``, ...), with no ``W`` attribute. ``contact_dofs``
+    are all eliminated DOFs (interior included). factor: the sparse factor of K_cc of another
+    space of the same bodies (a new pairing), reused.
     """
 
-    def __init__(self, model: FullModel):
-        with single_threaded_blas():
-            self._eliminate(model)
-
-    def _eliminate(self, model: FullModel) -> None:
-        self.model = model
-        self.structure = SparseInterface(model.dim, model.area, model.initial_overclosure, model.patterns)
-        K = model.stiffness.tocsr()
-        G = model.contact_operator.tocsr()
-        n = K.shape[0]
-        touched = np.zeros(n, dtype=bool)
-        touched[np.unique(G.indices)] = True
-        labelled = np.array(sorted(i for kind, i in model.labels.values() if kind == "free"), dtype=int)
-        q = labelled[~touched[labelled]]
-        a = np.setdiff1d(np.arange(n), q)
-        self.control_dofs, self.other_dofs = q, a
-        K_aa = K[a][:, a].tocsr()
-        self._K_aq = K[a][:, q].toarray()
-        self._K_qq = K[q][:, q].toarray()
-        self.Gc = G[:, a].tocsr()
+    def __init__(self, structure: Structure, factor=None):
+        self._reused = factor
+        super().__init__(structure)
+        del self._reused
+        order = np.concatenate([self.contact_dofs, self.control_dofs])
+        self._stiffness_cq = structure.stiffness.tocsr()[order][:, order].tocsr()
+        self._G_cq = sp.hstack([self.Gc, sp.csr_matrix((self.Gc.shape[0], self.control_dofs.size))], format="csr")
         self._GcT = self.Gc.T.tocsr()
-        self._Kaa = factorize(K_aa, label="stiffness of the bodies with their control points held")
-        compliance_Kaq = self._Kaa.solve(self._K_aq) if q.size else np.zeros((a.size, 0))
-        self.E = np.asarray(self.Gc @ compliance_Kaq)
-        self.Sq = self._K_qq - self._K_aq.T @ compliance_Kaq
-        self.control_stiffness = np.zeros((q.size, q.size))
-        # Each pattern, at unit amplitude, as a contact-space load: g_f and f_q columns.
-        Kp = model.prescribed_stiffness.tocsr()
-        motion = model.pattern_motion
-        effective_a = model.pattern_force[a] - Kp[a] @ motion
-        compliance_f = self._Kaa.solve(effective_a) if effective_a.shape[1] else effective_a
-        self.pattern_gf = np.asarray(self.Gc @ compliance_f)
-        self.pattern_fq = model.pattern_force[q] - Kp[q] @ motion - self._K_aq.T @ compliance_f
-        self.pattern_motion = motion
-        # the uncondensed tangent in the order [a, q]: K + Gᵀ·B·G, on one sparsity pattern
-        order = np.concatenate([a, q])
-        self._stiffness_aq = K[order][:, order].tocsr()
-        self._G_aq = sp.hstack([self.Gc, sp.csr_matrix((G.shape[0], q.size))], format="csr")
-        self.stiffness_scale = float(np.abs(K.diagonal()).max())  # N/mm
+        self._normal_compliance = None
+
+    def _split_free(self, free: np.ndarray, in_contact: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Control DOFs: the reference points' free DOFs (no contact row touches them); every
+        other free DOF, interior or surface, is eliminated."""
+        labelled = np.zeros(in_contact.size, dtype=bool)
+        labelled[np.fromiter(self.structure.labels.values(), dtype=int, count=len(self.structure.labels))] = True
+        control = free[labelled[free] & ~in_contact[free]]
+        return np.setdiff1d(free, control), control
+
+    def _factorise(self, stiffness, eliminated: np.ndarray):
+        """The sparse Cholesky factor of K_cc (PARDISO when installed), or the one reused."""
+        if self._reused is not None and np.array_equal(self._reused.index, eliminated):
+            return self._reused
+        factor = factorize(stiffness.tocsr()[eliminated][:, eliminated],
+                           label="stiffness of the bodies with their control points held")
+        return _IndexedFactor(factor.solve, eliminated)
+
+    def _form_compliance(self) -> None:
+        pass  # W stays implicit
 
     @property
     def n_rows(self) -> int:
         return self.Gc.shape[0]
 
-    @property
-    def n_control(self) -> int:
-        return self.control_dofs.size
-
-    def with_control_stiffness(self, extra: np.ndarray) -> SparseContactSpace:
-        raise NotImplementedError("locked bolts are not supported on the sparse path yet")
-
-    def driving(self, amplitudes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """g_f (mm) and f_q (N) for a vector of pattern amplitudes."""
-        return self.pattern_gf @ amplitudes, self.pattern_fq @ amplitudes
-
     def compliance(self, forces: np.ndarray) -> np.ndarray:
         """W·λ (mm) for nodal contact forces λ (N): one solve with the bodies' sparse factor."""
-        return np.asarray(self.Gc @ self._Kaa.solve(self._GcT @ forces))
+        return np.asarray(self.Gc @ self._Kcc.solve(self._GcT @ forces))
 
     def compliance_of_change(self, rows: np.ndarray, change: np.ndarray) -> np.ndarray:
         """W·Δλ (mm) for a change Δλ (N) on ``rows`` only."""
@@ -183,9 +183,47 @@ class SparseContactSpace:
         forces[rows] = change
         return self.compliance(forces)
 
+    def normal_compliance(self) -> np.ndarray:
+        """W's normal diagonal (n_points,) mm/N, by solves with the points' normal rows of G
+        as right-hand sides, in blocks (formed once per space; shared by its locked copies)."""
+        if self._normal_compliance is None:
+            dim = self.structure.dim
+            rows = self.Gc[0::dim]
+            per_block = max(1, min(rows.shape[0], _DIAGONAL_BLOCK_FLOATS // max(rows.shape[1], 1)))
+            diagonal = np.empty(rows.shape[0])
+            for start in range(0, rows.shape[0], per_block):
+                block = rows[start:start + per_block]
+                solved = self._Kcc.solve(block.T.toarray())
+                diagonal[start:start + per_block] = np.asarray(block.multiply(solved.T).sum(axis=1)).ravel()
+            self._normal_compliance = diagonal
+        return self._normal_compliance
+
+    def repaired(self, structure: Structure) -> SparseContactSpace:
+        """The space of the same bodies with a new pairing (finite sliding): K_cc's factor is reused."""
+        return SparseContactSpace(structure, factor=self._Kcc)
+
+    def tangent_operators(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """(K on the free DOFs in the order [c, q], with the locked bolts' stiffness in the
+        control block, N/mm; G in that order): the uncondensed Newton matrix is
+        K + Gᵀ·B·G."""
+        stiffness = self._stiffness_cq
+        if np.any(self.control_stiffness):
+            n_c = self.contact_dofs.size
+            extra = sp.bmat([[sp.csr_matrix((n_c, n_c)), None], [None, sp.csr_matrix(self.control_stiffness)]])
+            stiffness = (stiffness + extra).tocsr()
+            stiffness.sort_indices()
+        return stiffness, self._G_cq
+
     def linear_solver(self, settings: KrylovSettings | None = None) -> SparseNewtonSolver:
         """The solver of this space's Newton corrections."""
         return SparseNewtonSolver(self, settings)
+
+
+class _IndexedFactor:
+    """A sparse factor's ``solve`` and the DOFs (``index``) whose block it factorises."""
+
+    def __init__(self, solve, index: np.ndarray):
+        self.solve, self.index = solve, index
 
 
 class SparseNewtonSolver:
@@ -196,8 +234,8 @@ class SparseNewtonSolver:
     reference: "diagonal" (the default: Cholesky of K + Gᵀ·diag(B)·G, B the tangent blocks
     clipped at zero) or "tangent" (LU of the earlier tangent itself).
 
-    settings: relative_tolerance / final_tolerance bound the residual of the sparse system
-    relative to its right-hand side; fresh_iterations, max_iterations and single_precision (of
+    settings: relative_tolerance / final_tolerance (at most :data:`FINAL_TOLERANCE`) bound the
+    residual of the sparse system relative to its right-hand side; fresh_iterations, max_iterations and single_precision (of
     the preconditioner's factor) as in :class:`contact.linear.KrylovSettings` (direct_below
     does not apply: the dense path is the one for small interfaces, see :func:`choose_path`).
     """
@@ -207,7 +245,7 @@ class SparseNewtonSolver:
         self.space = space
         self.settings = KrylovSettings() if settings is None else settings
         self.counters = KrylovCounters()
-        self._assembler = TangentAssembler(space._stiffness_aq, space._G_aq, space.structure.dim)
+        self._assembler = TangentAssembler(*space.tangent_operators(), space.structure.dim)
         pattern = self._assembler.matrix(np.zeros((space.structure.n_points, space.structure.dim,
                                                    space.structure.dim)))
         self._upper = np.flatnonzero(np.repeat(np.arange(pattern.shape[0]), np.diff(pattern.indptr))
@@ -221,7 +259,8 @@ class SparseNewtonSolver:
     def description(self) -> str:
         """Which path solves this interface's Newton systems, in words (for run summaries)."""
         precision = "single" if self.settings.single_precision else "double"
-        return (f"sparse bodies ({self.space.model.n_dofs} DOFs, no dense W): GMRES on the uncondensed "
+        n_free = self.space.contact_dofs.size + self.space.control_dofs.size
+        return (f"sparse bodies ({n_free} DOFs, no dense W): GMRES on the uncondensed "
                 f"tangent preconditioned by a {precision}-precision PARDISO factor of an earlier one "
                 f"({self.reference}); "
                 "W·λ by a sparse Cholesky solve")
@@ -234,7 +273,8 @@ class SparseNewtonSolver:
         b = -r_kin
         tangent_b = np.matmul(blocks, b.reshape(-1, blocks.shape[1], 1)).reshape(-1)
         rhs = np.concatenate([-(space._GcT @ tangent_b), -r_ctl])
-        tolerance = self.settings.final_tolerance if final else self.settings.relative_tolerance
+        tolerance = (min(self.settings.final_tolerance, FINAL_TOLERANCE) if final
+                     else self.settings.relative_tolerance)
         if self._stale or self._factor is None:
             self._refactor(blocks)
         solution, iterations = _gmres(lambda x: matrix @ x, self._precondition, rhs, tolerance,
@@ -250,7 +290,7 @@ class SparseNewtonSolver:
         self._stale = self._lost_work > self._rebuild_work
         self.counters.solves += 1
         self.counters.krylov_iterations += iterations
-        n_a = space.other_dofs.size
+        n_a = space.contact_dofs.size
         return b + space.Gc @ solution[:n_a], solution[n_a:]
 
     def _refactor(self, blocks: np.ndarray) -> None:

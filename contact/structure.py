@@ -34,7 +34,8 @@ from reduction.threads import single_threaded_blas
 class Structure:
     """Condensed bodies and their contact interface in one global DOF numbering.
 
-    stiffness: (n, n) dense N/mm, the condensed stiffness of all bodies plus bolt elements.
+    stiffness: (n, n) N/mm, the condensed stiffness of all bodies: dense, or sparse CSR for
+        bodies kept whole (``assemble(..., keep_interior=True)``, :mod:`contact.sparse`).
     contact_operator: G, sparse (n_points·dim, n); rows per point [normal, tangent(s)].
     area: (n_points,) tributary area A (mm², or mm per unit thickness in 2D).
     initial_overclosure: h₀ (n_points,) mm.
@@ -160,12 +161,37 @@ def _symmetric(matrix: np.ndarray) -> np.ndarray:
     return matrix
 
 
+def dense_block(matrix, rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """matrix[rows, columns] as a dense array, for a dense or a sparse ``matrix``."""
+    if sp.issparse(matrix):
+        return matrix[rows][:, columns].toarray()
+    return matrix[np.ix_(rows, columns)]
+
+
 class ContactSpace:
-    """Exact elimination of a :class:`Structure` onto contact kinematics and control DOFs."""
+    """Exact elimination of a :class:`Structure` onto contact kinematics and control DOFs.
+
+    The dense path: the bodies are condensed, W is formed. :class:`contact.sparse.SparseContactSpace`
+    shares this elimination with the bodies kept whole and W implicit (the hooks
+    ``_split_free``, ``_factorise``, ``_form_compliance``).
+    """
 
     def __init__(self, structure: Structure):
         with single_threaded_blas():
             self._eliminate(structure)
+
+    def _split_free(self, free: np.ndarray, in_contact: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(eliminated DOFs c, control DOFs q) of the free DOFs: here every free DOF that no
+        contact row touches is a control DOF (reference points, surface nodes outside the pairing)."""
+        return free[in_contact[free]], free[~in_contact[free]]
+
+    def _factorise(self, stiffness, eliminated: np.ndarray):
+        """A factor of K_cc with ``solve(rhs)`` (rhs (n_c,) or (n_c, m), N → mm)."""
+        return _BlockFactor(stiffness, eliminated)
+
+    def _form_compliance(self) -> None:
+        """W = G_c·K_cc⁻¹·G_cᵀ (mm/N), dense."""
+        self.W = self._Kcc.congruence(self.Gc)
 
     def _eliminate(self, structure: Structure) -> None:
         self.structure = structure
@@ -175,22 +201,21 @@ class ContactSpace:
         free = np.setdiff1d(np.arange(n), prescribed)
         in_contact = np.zeros(n, dtype=bool)
         in_contact[np.unique(G.indices)] = True
-        self.contact_dofs = free[in_contact[free]]
-        self.control_dofs = free[~in_contact[free]]
+        self.contact_dofs, self.control_dofs = self._split_free(free, in_contact)
         self.prescribed = prescribed
         K = structure.stiffness
         c, q, p = self.contact_dofs, self.control_dofs, prescribed
-        self._Kcc = _BlockFactor(K, c)
-        self._Kcq, self._Kcp = K[np.ix_(c, q)], K[np.ix_(c, p)]
-        Gc = G[:, c]
-        self.Gc = Gc.tocsr()
-        self.W = self._Kcc.congruence(self.Gc)
+        self._Kcc = self._factorise(K, c)
+        self._Kcq = dense_block(K, c, q)
+        # K_cp stays sparse with sparse bodies (held surface DOFs make many columns)
+        self._Kcp = K[c][:, p].tocsr() if sp.issparse(K) else K[np.ix_(c, p)]
+        self.Gc = G[:, c].tocsr()
+        self._form_compliance()
         compliance_Kcq = self.compliance_Kcq = self._Kcc.solve(self._Kcq)
-        self.E = Gc @ compliance_Kcq
-        self.Sq = K[np.ix_(q, q)] - self._Kcq.T @ compliance_Kcq
+        self.E = np.asarray(self.Gc @ compliance_Kcq)
+        self.Sq = dense_block(K, q, q) - self._Kcq.T @ compliance_Kcq
         self.control_stiffness = np.zeros((q.size, q.size))  # locked bolts add to it
-        self._compliance_Kcp = self._Kcc.solve(self._Kcp)
-        self._Kqp = K[np.ix_(q, p)]
+        self._Kqp = dense_block(K, q, p)
         # Each pattern, at unit amplitude, as a contact-space load: g_f and f_q columns.
         n_patterns = len(structure.patterns)
         self.pattern_force_c = np.zeros((c.size, n_patterns))
@@ -203,10 +228,10 @@ class ContactSpace:
             else:
                 self.pattern_motion[:, k] = structure.motions[name][p]
         effective_c = self.pattern_force_c - self._Kcp @ self.pattern_motion
-        compliance_f = self._Kcc.solve(effective_c)
-        self.pattern_gf = Gc @ compliance_f
+        self.compliance_f = self._Kcc.solve(effective_c)
+        self.pattern_gf = np.asarray(self.Gc @ self.compliance_f)
         self.pattern_fq = (self.pattern_force_q - self._Kqp @ self.pattern_motion
-                           - self._Kcq.T @ compliance_f)
+                           - self._Kcq.T @ self.compliance_f)
 
     def with_control_stiffness(self, extra: np.ndarray) -> "ContactSpace":
         """The same space with ``extra`` (n_control, n_control) N/mm added to the control
@@ -223,7 +248,7 @@ class ContactSpace:
     @property
     def stiffness_scale(self) -> float:
         """The largest diagonal stiffness of the condensed bodies, N/mm (a scale for tolerances)."""
-        return float(np.abs(np.diag(self.structure.stiffness)).max())
+        return float(np.abs(self.structure.stiffness.diagonal()).max())
 
     def compliance(self, forces: np.ndarray) -> np.ndarray:
         """W·λ (mm) for nodal contact forces λ (N)."""
@@ -232,6 +257,15 @@ class ContactSpace:
     def compliance_of_change(self, rows: np.ndarray, change: np.ndarray) -> np.ndarray:
         """W·Δλ (mm) for a change Δλ (N) on ``rows`` only (W is symmetric: its rows are read)."""
         return self.W[rows].T @ change
+
+    def normal_compliance(self) -> np.ndarray:
+        """W's normal diagonal (n_points,) mm/N: each point's normal displacement under a unit
+        normal force of its own (the bodies' local compliance, :mod:`contact.cycle_jump`)."""
+        return np.diagonal(self.W)[0::self.structure.dim].copy()
+
+    def repaired(self, structure: Structure) -> ContactSpace:
+        """The space of ``structure``, the same bodies with a new pairing (finite sliding)."""
+        return ContactSpace(structure)
 
     def linear_solver(self, settings=None):
         """The solver of this space's Newton corrections (:class:`contact.linear.NewtonLinearSolver`)."""

@@ -14,9 +14,11 @@ import numpy as np
 
 from contact.bolts import Bolt
 from contact.assembly import Assembly, Body, ReferencePoint, assemble
+from contact.interface import surface_from_facets
 from contact.law import ContactLaw, ContactState
 from contact.procedure import LoadProgram, Procedure
 from contact.solver import NewtonSettings
+from contact.sparse import decide_path, space_of
 from pipelines.coupling import Coupled, CouplingSettings, coupled_patterns, coupled_program, multibody_loading
 from reduction.mesh import generators as meshes
 from pipelines.scene import Scene
@@ -31,7 +33,12 @@ COMPONENTS = {"ux": 0, "uy": 1, "uz": 2}
 
 @dataclass(frozen=True)
 class Model:
-    """Everything a run needs, built from a scene."""
+    """Everything a run needs, built from a scene.
+
+    contact_path: "dense" (condensed bodies, dense W) or "sparse" (bodies kept whole,
+    :mod:`contact.sparse`), as ``[contact] solver`` asked or chose; contact_path_reason: why,
+    in words (e.g. "2,704 points ≥ 2,500").
+    """
 
     scene: Scene
     assembly: Assembly
@@ -41,6 +48,12 @@ class Model:
     settings: NewtonSettings
     meshes: dict
     coupling: Coupled | None = None
+    contact_path: str = "dense"
+    contact_path_reason: str = ""
+
+    def contact_space(self):
+        """The contact space of the model's structure on its contact path (dense or sparse)."""
+        return space_of(self.assembly.structure)
 
     def initial_state(self) -> ContactState:
         n_tangent = self.scene.dimension - 1
@@ -173,10 +186,14 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
     bolts = tuple(Bolt(name, spec["head"], spec["nut"], np.asarray(spec["axis"], float),
                        float(spec["stiffness"]), float(spec["pretension"]))
                   for name, spec in data.get("bolts", {}).items()) if "bolts" in scene.effects else ()
+    slave_body = next(body for body in bodies if body.name == slave[0])
+    n_points = surface_from_facets(slave_body.elastic.mesh, slave[1], "contact.slave").nodes.size
+    path, reason = decide_path(contact.get("solver", "auto"), n_points, scene.dimension)
     assembly = assemble(bodies, slave, master, loads=_control_patterns(scene, "loads"),
                         motions=_control_patterns(scene, "motions"),
                         search_distance=contact.get("search_distance", np.inf), bolts=bolts,
-                        pairing=contact.get("pairing", "auto"), condensers=condensers)
+                        pairing=contact.get("pairing", "auto"), condensers=condensers,
+                        keep_interior=path == "sparse")
     shapes = {e["name"]: e["history"] for kind in ("loads", "motions", "body_loads") for e in data.get(kind, [])}
     shapes.update({f"bolt.{bolt.name}": "ramp" for bolt in bolts})
     shapes.update({name: "history" for name in pattern_names})
@@ -186,7 +203,8 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
                              if k in Procedure.__dataclass_fields__})
     settings = NewtonSettings(wear_cap=proc.get("wear_cap", np.inf),
                               max_cutbacks=proc.get("max_cutbacks", NewtonSettings.max_cutbacks))
-    model = Model(scene, assembly, _law(scene), program, procedure, settings, built_meshes)
+    model = Model(scene, assembly, _law(scene), program, procedure, settings, built_meshes,
+                  contact_path=path, contact_path_reason=reason)
     if coupled_body is None:
         return model
     model = replace(model, coupling=Coupled(CouplingSettings.of(scene), loading, None, pattern_names))

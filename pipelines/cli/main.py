@@ -104,6 +104,8 @@ def _human_summary(outcome) -> str:
     from contact.verdict import VERDICT_MEANINGS
 
     lines.insert(1, f"  {s['verdict']}: {VERDICT_MEANINGS.get(s['verdict'], '')}")
+    if s.get("contact_solver") is not None:
+        lines.append(f"  contact solver: {s['contact_solver']}; {s['linear_solver']}")
     if outcome.stage_times:
         times = outcome.stage_times
         phases = ", ".join(f"{k.removesuffix('_phase_s')} {v:.1f} s" for k, v in times.items() if k.endswith("_phase_s"))

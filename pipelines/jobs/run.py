@@ -99,6 +99,11 @@ def _solver(model: Model, space: ContactSpace):
     return SlidingSolver(model.assembly, model.law, model.settings, mode=sliding, method=method, space=space)
 
 
+def contact_solver(model: Model) -> str:
+    """Which contact path ran and why, e.g. "sparse (2,704 points ≥ 2,500)"."""
+    return f"{model.contact_path} ({model.contact_path_reason})"
+
+
 def _linear_solver(solver):
     """The Newton linear solver of a contact solver (a sliding solver's current one)."""
     return solver.solver.linear if isinstance(solver, SlidingSolver) else solver.linear
@@ -108,7 +113,7 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
               resume: bool = False) -> Outcome:
     stage_times = {}
     clock = time.perf_counter()
-    space = ContactSpace(model.assembly.structure)
+    space = model.contact_space()
     solver = _solver(model, space)
     stage_times["contact_space_s"] = time.perf_counter() - clock
     effects = model.scene.effects
@@ -158,7 +163,8 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
         write_increment_series(path, out_dir / "interface_increments.xdmf")
     stage_times["outputs_s"] = time.perf_counter() - clock
     summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
-               **result.figures, "linear_solver": _linear_solver(solver).description()}
+               **result.figures, "contact_solver": contact_solver(model),
+               "linear_solver": _linear_solver(solver).description()}
     summary.update(solver.summary() if isinstance(solver, SlidingSolver) else
                    {"sliding": "small", "sliding_mode": "small", "pairing": model.assembly.pairing.method})
     if model.coupling is not None:

@@ -34,7 +34,6 @@ from contact.checks import tangent_errors  # noqa: E402
 from contact.energy import EnergyMeter, MeterObserver  # noqa: E402
 from contact.law import ContactLaw, ContactState, Status, evaluate  # noqa: E402
 from contact.solver import ContactSolver, Effects  # noqa: E402
-from contact.structure import ContactSpace  # noqa: E402
 from pipelines import scene as scenes  # noqa: E402
 from pipelines.build import build  # noqa: E402
 from reduction.mesh.motion import move_surface  # noqa: E402
@@ -59,7 +58,7 @@ def hertz_reference() -> tuple[float, float]:
 
 
 def _solver(model):
-    space = ContactSpace(model.assembly.structure)
+    space = model.contact_space()
     return space, ContactSolver(space, model.law, model.settings)
 
 

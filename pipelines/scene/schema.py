@@ -118,6 +118,11 @@ SCHEMA = {
                     "must be 'auto', 'small' or 'finite'",
                     "pairing fixed (small) or following the bodies (finite); auto: finite once "
                     "the slip reaches an element"),
+        "solver": (str, False, lambda v: None if v in ("auto", "dense", "sparse") else
+                   "must be 'auto', 'dense' or 'sparse'",
+                   ("contact solver: dense (condensed bodies, dense contact compliance W) or sparse "
+                   "(bodies kept whole and sparse, no dense W: memory and time about linear in the "
+                   "points); auto: sparse from 2,500 contact points in 3D")),
     },
     "coupling": {
         "body": (str, True, None, "the contact body that is the counterweight"),

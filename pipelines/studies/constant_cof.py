@@ -13,7 +13,6 @@ import numpy as np
 
 from contact import procedure
 from contact.solver import ContactSolver
-from contact.structure import ContactSpace
 from pipelines import scene as scenes
 from pipelines.build import build
 from reduction.errors import InputError
@@ -21,7 +20,7 @@ from reduction.errors import InputError
 
 def _last_cycle_max_shear(scene) -> tuple[np.ndarray, np.ndarray, dict]:
     model = build(scene)
-    space = ContactSpace(model.assembly.structure)
+    space = model.contact_space()
     solver = ContactSolver(space, model.law, model.settings)
     result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
                            cof_evolution="cof_evolution" in scene.effects, wear=False)
