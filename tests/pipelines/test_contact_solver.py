@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 
 import contact.sparse
+from contact.solver import NewtonSettings
 from pipelines import scene as scenes
 from pipelines.build import build
 from pipelines.cli.main import _human_summary
@@ -97,12 +98,18 @@ def test_sparse_run_equals_the_dense_run(tmp_path, body_load):
     damage = {name: worst.pop(name) for name in list(worst) if any(
         key in name for key in ("surface_tangential_stress", "fdp", "ffdp"))}
     assert max(value for name, value in damage.items() if not name.endswith("location_mm")) < 1e-7, damage
-    assert max(worst.values()) < 1e-8, sorted(worst.items(), key=lambda item: -item[1])[:5]
+    # Both paths stop Newton inside the same tolerance (1e-10 mm on the kinematics), from
+    # different iterates (another linear solver, the same predictors): a stuck point's shear
+    # may differ by the stick stiffness μ·p/γ_crit times that tolerance, 1e-10 mm / γ_crit =
+    # 1e-7 of the largest shear μ·p. That is the floor of any comparison of two converged
+    # runs; every field agrees within it (most to 1e-9).
+    floor = NewtonSettings().displacement_tolerance / 1.0e-3  # γ_crit of the scene, mm
+    assert max(worst.values()) < floor, sorted(worst.items(), key=lambda item: -item[1])[:5]
     balance = [data["increments/external_work"] - data["increments/stored_energy"] for data in (dense, sparse)]
     assert _relative(*balance) < 1e-8 * max(1.0, np.max(np.abs(dense["increments/external_work"]))
                                             / np.max(np.abs(balance[0])))
     for name in ("max_wear_depth_mm", "dissipated_energy_mJ", "clamp_force_loss_fraction"):
-        assert sparse_outcome.summary[name] == pytest.approx(dense_outcome.summary[name], rel=1e-8, abs=1e-300)
+        assert sparse_outcome.summary[name] == pytest.approx(dense_outcome.summary[name], rel=floor, abs=1e-300)
 
 
 def test_a_sparse_run_resumes_bit_for_bit(tmp_path, monkeypatch):
