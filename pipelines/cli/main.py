@@ -66,10 +66,12 @@ def cmd_report(args) -> int:
 
 def _widened(*fractions) -> str:
     """The note that explains area fractions above 100 %: they refer to the contact area closed
-    after the preload, and wear can bring points beyond it into contact."""
+    after the preload, and wear, or a contact patch that moves as the bodies slide, can bring
+    points beyond it into contact."""
     if max((f for f in fractions if f is not None), default=0.0) <= 1.0:
         return ""
-    return " (above 100 %: wear has widened the contact beyond the area closed after the preload)"
+    return (" (above 100 %: points beyond the area closed after the preload came into contact, as wear "
+            "widened the contact or the contact patch moved)")
 
 
 def _human_summary(outcome) -> str:
@@ -81,7 +83,8 @@ def _human_summary(outcome) -> str:
              + _widened(s['slip_area_fraction'] + s['stick_area_fraction'], s['damaged_area_fraction'],
                         s['cof_evolved_area_fraction']),
              f"  still sliding (the verdict's measure) {s.get('active_slip_area_fraction', s['slip_area_fraction']):.1%}, "
-             f"COF evolved on {s['cof_evolved_area_fraction']:.1%}",
+             f"COF evolved on {s['cof_evolved_area_fraction']:.1%}"
+             + _widened(s.get('active_slip_area_fraction'), s['cof_evolved_area_fraction']),
              f"  max wear depth {s['max_wear_depth_mm'] * 1000:.2f} µm, dissipated {s['dissipated_energy_mJ']:.4g} mJ"]
     if "wing_amplitude_mm" in s:
         lines.insert(1, f"  wing amplitude {1e3 * s['wing_amplitude_mm']:.0f} µm at {s['engine_speed_rpm']:.0f} rpm, "
