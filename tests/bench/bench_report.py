@@ -19,6 +19,7 @@ peak memory is its own) prints. Units: mm, N, MPa, s.
 
 from __future__ import annotations
 
+import cProfile
 import json
 import resource
 import time
@@ -153,19 +154,27 @@ class RunRecord:
 
 
 def drive(solver, state: ContactState, case: FlatOnFlat, *, label: str, points: int, dofs: int,
-          setup_time: float):
+          setup_time: float, profile: tuple[int, Path] | None = None):
     """Run ``case.history`` through ``solver.increment``; returns the record and per-point fields.
 
     Wall and CPU (process) time are both kept: on a shared machine the CPU time of a
-    single-threaded run is the better measure of the work done.
+    single-threaded run is the better measure of the work done. profile: (row of the history,
+    file): that increment runs under cProfile, its statistics written to the file (pstats);
+    choose a row before ``case.cycle`` to keep the cycle's figures free of the profiler's cost.
 
     fields: pressure (n,) MPa, shear (n, 2) MPa and COF (n,) at the end of the history.
     """
     equilibrium = solver.initial_equilibrium()
     times, cpu_times, iterations, max_iterations, cutbacks = [], [], [], [], 0
-    for amplitudes in case.history:
+    for row, amplitudes in enumerate(case.history):
+        profiler = cProfile.Profile() if profile is not None and row == profile[0] else None
         start, start_cpu = time.perf_counter(), time.process_time()
+        if profiler is not None:
+            profiler.enable()
         equilibrium, state, _, stats = solver.increment(equilibrium, state, amplitudes, case.effects)
+        if profiler is not None:
+            profiler.disable()
+            profiler.dump_stats(profile[1])
         times.append(time.perf_counter() - start)
         cpu_times.append(time.process_time() - start_cpu)
         iterations.append(stats.iterations)
@@ -179,11 +188,12 @@ def drive(solver, state: ContactState, case: FlatOnFlat, *, label: str, points: 
 
 
 def run(points_per_side: int, solver: str, increments_per_quarter: int = 4,
-        mesh: str = "graded") -> tuple[dict, dict]:
+        mesh: str = "graded", profile: tuple[int, Path] | None = None) -> tuple[dict, dict]:
     """Set up and run the case with the ``condensed``, ``dense`` (condensed, exact dense LU in
     every Newton iteration), ``sparse`` (:mod:`contact.sparse`: bodies kept sparse, no dense W),
     ``auto`` (``sparse`` or ``condensed`` by :func:`contact.sparse.choose_path`) or ``full``
-    solver: (summary, fields). mesh: the blocks' mesh (:func:`flat_on_flat`), graded by default.
+    solver: (summary, fields). mesh: the blocks' mesh (:func:`flat_on_flat`), graded by default;
+    profile: one increment under cProfile (:func:`drive`).
 
     setup_s is the condensation (assemble, split into condense_s: coupling and Schur
     complements of the bodies, and contact_space_s: the elimination to W, E, S_q) or the
@@ -233,7 +243,7 @@ def run(points_per_side: int, solver: str, increments_per_quarter: int = 4,
     setup = time.perf_counter() - start
     split["setup_cpu_s"] = time.process_time() - start_cpu
     record, fields = drive(engine, case.initial_state(engine.n_points), case, label=solver,
-                           points=engine.n_points, dofs=dofs, setup_time=setup)
+                           points=engine.n_points, dofs=dofs, setup_time=setup, profile=profile)
     summary = record.summary(case.cycle) | split | {"mesh": mesh}
     summary["process_peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     summary["peak_rss_mb"] = _peak_memory_mb() or summary["process_peak_rss_mb"]
@@ -298,8 +308,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("fields", type=Path, help="where to write the final per-point fields (.npz)")
     parser.add_argument("--increments-per-quarter", type=int, default=4)
     parser.add_argument("--mesh", choices=("graded", "uniform"), default="graded")
+    parser.add_argument("--profile", nargs=2, metavar=("ROW", "STATS"),
+                        help="run the history's row ROW under cProfile, its statistics to the file STATS")
     args = parser.parse_args(argv)
-    summary, fields = run(args.points_per_side, args.solver, args.increments_per_quarter, args.mesh)
+    profile = None if args.profile is None else (int(args.profile[0]), Path(args.profile[1]))
+    summary, fields = run(args.points_per_side, args.solver, args.increments_per_quarter, args.mesh, profile)
     np.savez(args.fields, **fields)
     print(json.dumps(summary))
     return 0
