@@ -83,6 +83,54 @@ def flat_block(size_x: float, size_y: float, height: float, n_x: int, n_y: int, 
     return skfem.MeshHex.init_tensor(x, y, z0 + z)
 
 
+def graded_flat_block(size_x: float, size_y: float, height: float, n_x: int, n_y: int,
+                      z0: float = 0.0, top_fine: bool = False,
+                      coarse_size: float | None = None) -> skfem.MeshHex:
+    """3D box [−sx/2, sx/2]×[−sy/2, sy/2]×[z0, z0+height] of hexahedra, fine on one face and
+    coarsening in plane with depth (an engineer's contact mesh, not a tensor grid).
+
+    The face at z0 (at z0 + height with ``top_fine``) has the n_x × n_y cells of
+    :func:`flat_block` (its nodes are bit for bit those of the same face of ``flat_block``),
+    and so have the two layers under it (each one cell size thick); then rounds of an x and a
+    y transition (:mod:`reduction.mesh.layers`: 3:1, conforming, no hanging nodes), each
+    2·(cell size) thick, triple the in-plane cell size while it stays ≤ ``coarse_size`` (mm;
+    no limit by default) and the rounds fit in the height; layers growing ×1.3 fill the rest
+    of the height. Cells that do not group by three stay single (at the ends of a row). When
+    no round fits, the tensor grid of the fine face is kept through the height. Lengths mm.
+    """
+    hx, hy = size_x / n_x, size_y / n_y
+    x = np.linspace(-0.5 * size_x, 0.5 * size_x, n_x + 1)
+    y = np.linspace(-0.5 * size_y, 0.5 * size_y, n_y + 1)
+    coarse = np.inf if coarse_size is None else max(float(coarse_size), hx, hy)
+    cell = max(hx, hy)
+    transitions = _transition_plan(cell, coarse, height)
+    if transitions is None:
+        plan, depth = [("regular", 0.0, cell), ("regular", cell, 2.0 * cell)], 2.0 * cell
+        if depth > height - 1e-9:
+            plan, depth = [("regular", 0.0, height)], height
+    else:
+        plan, depth, cell = transitions
+    plan += _graded_layers(depth, [height], cell, coarse)
+    keep_x, keep_y = x[[0, -1]], y[[0, -1]]
+    layered = layered_block(x, y, plan, keep_x, keep_y, [tuple(keep_x)], [tuple(keep_y)])
+    # layers.py rounds its corners to 1e-9 mm; every in-plane coordinate lies on a fine line
+    # and every depth on a layer's bottom, middle or top: snap them back to the exact values.
+    levels = np.unique([v for _, a, b in plan for v in (a, 0.5 * (a + b), b)])
+    px, depths, py = (_snap(values, lines) for values, lines in zip(layered.p, (x, levels, y)))
+    # layered (x, depth, y) → (x, y, z): one axis swap, a mirror; with top_fine a second
+    # mirror (z = z0 + height − depth) restores the orientation.
+    z = z0 + height - depths if top_fine else z0 + depths
+    t = layered.t if top_fine else layered.t[[1, 0, 4, 5, 2, 3, 7, 6]]  # swap the two depth faces
+    return skfem.MeshHex(np.vstack([px, py, z]), np.ascontiguousarray(t))
+
+
+def _snap(values: np.ndarray, lines: np.ndarray) -> np.ndarray:
+    """Each of ``values`` replaced by the nearest of the sorted ``lines`` (mm)."""
+    right = np.clip(np.searchsorted(lines, values), 1, lines.size - 1)
+    left = right - 1
+    return np.where(np.abs(values - lines[left]) <= np.abs(lines[right] - values), lines[left], lines[right])
+
+
 def _plan_with_hole(length: float, width: float, hole_x: float, hole_radius: float, size: float,
                     fine_from: float, fine_to: float, coarse_size: float, block_half: float):
     """2D quads of the rectangle [0, length] × [−width/2, width/2] with a round hole.

@@ -1,6 +1,9 @@
 """The 3D flat-on-flat benchmark: one case, one cyclic partial-slip history, two solvers.
 
-Two equal square blocks of hexahedra touch on z = 0. The lower block is clamped at its
+Two equal square blocks of hexahedra touch on z = 0: tensor grids graded in z only
+("uniform"), or fine at the contact face and coarsening 3:1 in plane with depth ("graded",
+:func:`reduction.mesh.generators.graded_flat_block`: the same contact face, a fraction of the
+nodes; the scale bench's bodies). The lower block is clamped at its
 bottom; the top face of the upper block is rigidly coupled to a reference point that is
 pressed down (force control) and then moved tangentially back and forth (displacement
 control). The slave face (upper block) has ``points_per_side``² nodes: the contact points.
@@ -16,6 +19,7 @@ peak memory is its own) prints. Units: mm, N, MPa, s.
 
 from __future__ import annotations
 
+import cProfile
 import json
 import resource
 import time
@@ -28,8 +32,8 @@ import skfem
 from contact.assembly import Body, ReferencePoint
 from contact.law import ContactLaw, ContactState
 from contact.solver import Effects
-from reduction.mesh.generators import flat_block
 from reduction.elasticity import ElasticBody, assemble_elastic_body
+from reduction.mesh.generators import flat_block, graded_flat_block
 
 
 @dataclass(frozen=True)
@@ -66,8 +70,13 @@ def box_body(mesh: skfem.MeshHex, youngs_modulus: float, poisson_ratio: float) -
 def flat_on_flat(points_per_side: int, *, size: float = 10.0, height: float = 5.0,
                  layers: int = 6, pressure: float = 100.0, slip_amplitude: float = 5.0e-3,
                  increments_per_quarter: int = 4, cycles: int = 1,
-                 youngs_modulus: float = 210e3, poisson_ratio: float = 0.3) -> FlatOnFlat:
+                 youngs_modulus: float = 210e3, poisson_ratio: float = 0.3,
+                 mesh: str = "uniform") -> FlatOnFlat:
     """Two ``size``×``size``×``height`` mm blocks, ``points_per_side``² contact points.
+
+    mesh: "uniform" (n×n elements in plane through ``layers`` layers growing ×1.4 away from
+    the contact) or "graded" (:func:`reduction.mesh.generators.graded_flat_block`; ``layers``
+    is not used). Both have the same contact face nodes.
 
     pressure: nominal contact pressure (MPa) applied as a force on the reference point.
     slip_amplitude: tangential reference-point motion amplitude (mm) in x.
@@ -75,8 +84,14 @@ def flat_on_flat(points_per_side: int, *, size: float = 10.0, height: float = 5.
     cycles, each quarter in ``increments_per_quarter`` increments.
     """
     n_el = points_per_side - 1
-    upper = flat_block(size, size, height, n_el, n_el, layers, z0=0.0, z_growth=1.4)
-    lower = flat_block(size, size, height, n_el, n_el, layers, z0=-height, z_growth=1.4, top_fine=True)
+    if mesh == "uniform":
+        upper = flat_block(size, size, height, n_el, n_el, layers, z0=0.0, z_growth=1.4)
+        lower = flat_block(size, size, height, n_el, n_el, layers, z0=-height, z_growth=1.4, top_fine=True)
+    elif mesh == "graded":
+        upper = graded_flat_block(size, size, height, n_el, n_el, z0=0.0)
+        lower = graded_flat_block(size, size, height, n_el, n_el, z0=-height, top_fine=True)
+    else:
+        raise ValueError(f"mesh must be 'uniform' or 'graded', got {mesh!r}")
     upper_body = box_body(upper, youngs_modulus, poisson_ratio)
     lower_body = box_body(lower, youngs_modulus, poisson_ratio)
     top = np.flatnonzero(np.isclose(upper.p[2], height))
@@ -139,19 +154,27 @@ class RunRecord:
 
 
 def drive(solver, state: ContactState, case: FlatOnFlat, *, label: str, points: int, dofs: int,
-          setup_time: float):
+          setup_time: float, profile: tuple[int, Path] | None = None):
     """Run ``case.history`` through ``solver.increment``; returns the record and per-point fields.
 
     Wall and CPU (process) time are both kept: on a shared machine the CPU time of a
-    single-threaded run is the better measure of the work done.
+    single-threaded run is the better measure of the work done. profile: (row of the history,
+    file): that increment runs under cProfile, its statistics written to the file (pstats);
+    choose a row before ``case.cycle`` to keep the cycle's figures free of the profiler's cost.
 
     fields: pressure (n,) MPa, shear (n, 2) MPa and COF (n,) at the end of the history.
     """
     equilibrium = solver.initial_equilibrium()
     times, cpu_times, iterations, max_iterations, cutbacks = [], [], [], [], 0
-    for amplitudes in case.history:
+    for row, amplitudes in enumerate(case.history):
+        profiler = cProfile.Profile() if profile is not None and row == profile[0] else None
         start, start_cpu = time.perf_counter(), time.process_time()
+        if profiler is not None:
+            profiler.enable()
         equilibrium, state, _, stats = solver.increment(equilibrium, state, amplitudes, case.effects)
+        if profiler is not None:
+            profiler.disable()
+            profiler.dump_stats(profile[1])
         times.append(time.perf_counter() - start)
         cpu_times.append(time.process_time() - start_cpu)
         iterations.append(stats.iterations)
@@ -164,11 +187,13 @@ def drive(solver, state: ContactState, case: FlatOnFlat, *, label: str, points: 
     return record, fields
 
 
-def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> tuple[dict, dict]:
+def run(points_per_side: int, solver: str, increments_per_quarter: int = 4,
+        mesh: str = "graded", profile: tuple[int, Path] | None = None) -> tuple[dict, dict]:
     """Set up and run the case with the ``condensed``, ``dense`` (condensed, exact dense LU in
     every Newton iteration), ``sparse`` (:mod:`contact.sparse`: bodies kept sparse, no dense W),
     ``auto`` (``sparse`` or ``condensed`` by :func:`contact.sparse.choose_path`) or ``full``
-    solver: (summary, fields).
+    solver: (summary, fields). mesh: the blocks' mesh (:func:`flat_on_flat`), graded by default;
+    profile: one increment under cProfile (:func:`drive`).
 
     setup_s is the condensation (assemble, split into condense_s: coupling and Schur
     complements of the bodies, and contact_space_s: the elimination to W, E, S_q) or the
@@ -185,7 +210,7 @@ def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> t
 
     from contact.sparse import choose_path
 
-    case = flat_on_flat(points_per_side, increments_per_quarter=increments_per_quarter)
+    case = flat_on_flat(points_per_side, increments_per_quarter=increments_per_quarter, mesh=mesh)
     _reset_peak_memory()  # the solver's peak, not the transient of building the meshes
     if solver == "auto":  # what a run would choose: the dense W below the measured threshold
         solver = "sparse" if choose_path(points_per_side**2, 3) == "sparse" else "condensed"
@@ -218,8 +243,8 @@ def run(points_per_side: int, solver: str, increments_per_quarter: int = 4) -> t
     setup = time.perf_counter() - start
     split["setup_cpu_s"] = time.process_time() - start_cpu
     record, fields = drive(engine, case.initial_state(engine.n_points), case, label=solver,
-                           points=engine.n_points, dofs=dofs, setup_time=setup)
-    summary = record.summary(case.cycle) | split
+                           points=engine.n_points, dofs=dofs, setup_time=setup, profile=profile)
+    summary = record.summary(case.cycle) | split | {"mesh": mesh}
     summary["process_peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     summary["peak_rss_mb"] = _peak_memory_mb() or summary["process_peak_rss_mb"]
     if solver != "full":
@@ -282,8 +307,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("solver", choices=("condensed", "dense", "sparse", "auto", "full"))
     parser.add_argument("fields", type=Path, help="where to write the final per-point fields (.npz)")
     parser.add_argument("--increments-per-quarter", type=int, default=4)
+    parser.add_argument("--mesh", choices=("graded", "uniform"), default="graded")
+    parser.add_argument("--profile", nargs=2, metavar=("ROW", "STATS"),
+                        help="run the history's row ROW under cProfile, its statistics to the file STATS")
     args = parser.parse_args(argv)
-    summary, fields = run(args.points_per_side, args.solver, args.increments_per_quarter)
+    profile = None if args.profile is None else (int(args.profile[0]), Path(args.profile[1]))
+    summary, fields = run(args.points_per_side, args.solver, args.increments_per_quarter, args.mesh, profile)
     np.savez(args.fields, **fields)
     print(json.dumps(summary))
     return 0
