@@ -603,6 +603,13 @@ def main(argv=None) -> int:
     if ours:
         signal.signal(signal.SIGINT, _interrupt)
         sys.unraisablehook = _unraisable
+        # A Ctrl-C while dask's nannies stop their worker processes can end this process before
+        # they release their multiprocessing semaphores; multiprocessing's resource tracker then
+        # frees them and says so at exit ("resource_tracker: There appear to be 1 leaked
+        # semaphore objects to clean up at shutdown"). Nothing is left behind, so the tracker,
+        # which starts later with this process's warning options, is told to stay quiet.
+        if "ignore:resource_tracker:UserWarning" not in sys.warnoptions:
+            sys.warnoptions.append("ignore:resource_tracker:UserWarning")
     resumable = []
     try:
         return _main(argv, resumable)
