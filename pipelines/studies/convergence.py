@@ -128,6 +128,8 @@ def run_level(scene_path: str, size_mm: float, out_dir: str, cache_dir: str | No
         limit = find_limit(scene_path, *limit_range_mm, tolerance_mm=tolerance_mm, grid=grid, overrides=overrides,
                            cache_dir=cache_dir, workers=0, progress=False)
         level.limit_mm, level.monotone = limit.limit_mm, limit.monotone
+        level.extra["limit_bracket_mm"] = list(limit.bracket_mm)
+        level.extra["limit_runs"] = limit.to_json().get("runs")
     return level
 
 
@@ -234,7 +236,12 @@ def plot_convergence(study: dict, path: Path) -> Path:
     areas.legend(fontsize=8)
     if found:
         limits = axes[1, 0]
-        limits.plot(*zip(*found), marker="s", color="k", label="amplitude limit")
+        limits.plot(*zip(*found), marker="s", color="k", label="amplitude limit (lowest not stuck)")
+        stuck = [(level["size_mm"], 1e3 * level["extra"]["limit_bracket_mm"][0]) for level in levels
+                 if level["limit_mm"] is not None and (level["extra"].get("limit_bracket_mm") or [None])[0] is not None]
+        if stuck:
+            limits.plot(*zip(*stuck), marker="v", linestyle="none", color="tab:green",
+                        label="highest stuck below it")
         estimate = study["extrapolated"].get("limit_mm")
         if estimate:
             limits.axhline(1e3 * estimate["estimate"], color="0.5", linestyle="--", label="Richardson estimate")
