@@ -8,6 +8,7 @@ import skfem
 
 from reduction.elasticity import assemble_elastic_body
 from reduction.mesh.generators import flat_block, graded_flat_block
+from tests.reduction.patch import interior_residual
 
 SIZE, HEIGHT, CELLS = 10.0, 5.0, 14  # mm; 15 × 15 contact points
 #: the graded block's static compliance against the fine tensor grid's, by traction direction.
@@ -86,11 +87,4 @@ def test_graded_flat_block_passes_the_patch_test():
     """A linear displacement field is in equilibrium at every interior node (the 3:1 transitions
     included); a hanging node would carry an unbalanced force."""
     mesh = graded_flat_block(SIZE, SIZE, HEIGHT, CELLS, CELLS)
-    body = assemble_elastic_body(mesh, 210e3, 0.3)
-    strain = np.array([[1e-3, 2e-4, 0.0], [2e-4, -5e-4, 3e-4], [0.0, 3e-4, 7e-4]])
-    u = np.zeros(body.n_dofs)
-    u[body.node_dofs] = body.coordinates @ strain.T
-    force = (body.stiffness @ u)[body.node_dofs]
-    boundary = np.zeros(mesh.p.shape[1], dtype=bool)
-    boundary[mesh.facets[:, mesh.boundary_facets()].ravel()] = True
-    assert np.abs(force[~boundary]).max() < 1e-9 * np.abs(force).max()
+    assert interior_residual(mesh) < 1e-9

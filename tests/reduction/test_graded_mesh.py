@@ -6,6 +6,7 @@ import skfem
 
 from reduction.errors import InputError
 from reduction.mesh.generators import counterweight_block, grid_lines, web_block
+from tests.reduction.patch import interior_residual
 
 # a small CW–web joint (mm): the shipped layout scaled down, so that a 2.5 mm mesh is quick
 CW = {"width": 300.0, "height": 80.0, "thickness": 30.0, "hub_width": 140.0, "hub_height": 15.0,
@@ -106,14 +107,5 @@ def test_relief_must_leave_the_holes_on_the_pads():
 def test_layered_counterweight_passes_the_patch_test():
     """A linear displacement field is in equilibrium at every interior node of a conforming mesh
     (the 3:1 transitions included); a hanging node would carry an unbalanced force."""
-    from reduction.elasticity import assemble_elastic_body
-
     mesh = counterweight_block(**CW, contact_size=2.5, coarse_size=20.0, relief_half_width=RELIEF)
-    body = assemble_elastic_body(mesh, 210_000.0, 0.3)
-    strain = np.array([[1e-3, 2e-4, 0.0], [2e-4, -5e-4, 3e-4], [0.0, 3e-4, 7e-4]])
-    u = np.zeros(body.n_dofs)
-    u[body.node_dofs] = body.coordinates @ strain.T
-    force = (body.stiffness @ u)[body.node_dofs]
-    boundary = np.zeros(mesh.p.shape[1], dtype=bool)
-    boundary[mesh.facets[:, mesh.boundary_facets()].ravel()] = True
-    assert np.abs(force[~boundary]).max() < 1e-9 * np.abs(force).max()
+    assert interior_residual(mesh) < 1e-9
