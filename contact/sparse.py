@@ -50,11 +50,11 @@ from reduction.errors import InputError
 from reduction.factorization import factorize
 
 #: contact points from which the sparse path is chosen (3D), set by memory, measured with
-#: the flat-on-flat benchmark (tests/bench/test_bench_scale.py): the dense path's set-up needs
-#: 11.5 GB at 3,600 points, growing as n², so 6 GB (the target of issue 14) at ~2,600; the
-#: sparse one needs 1.1 GB at 1,600 points and 2.7 GB at 3,600. In time the dense path is
-#: ahead there (1,600 points: 0.12 s of CPU per increment against 0.55 s), its
-#: per-increment cost growing as n² against about n for the sparse one.
+#: the flat-on-flat benchmark on graded bodies (tests/bench/test_bench_scale.py): the dense
+#: path's set-up needs 10.2 GB at 3,600 points, growing as n², so 6 GB (the target of issue
+#: 14) at ~2,760; the sparse one needs 0.83 GB at 1,600 points and 1.8 GB at 3,600. In time
+#: the dense path is ahead there (1,600 points: 0.150 s of CPU per increment against 0.453 s),
+#: its per-increment cost growing as n² against about n for the sparse one.
 SPARSE_FROM_POINTS = 2500
 
 #: the choices of ``[contact] solver``
