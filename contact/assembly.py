@@ -192,7 +192,7 @@ def assemble(bodies: list[Body], slave: tuple[str, np.ndarray], master: tuple[st
     condensers: body name → callable (stiffness, transformation, retained, fixed, loads) →
     Condensation used instead of :func:`reduction.condensation.condense` (a body whose
     factorisation is shared with another load case, :class:`pipelines.coupling.SharedCondenser`).
-    keep_interior: keep every body whole instead (:func:`reduction.condensation.kept_whole`:
+    keep_interior: keep every body whole instead (:func:`_kept_whole`:
     the contact surface and reference DOFs first, as condensed, then the interior); the
     structure's stiffness is then sparse, for :class:`contact.sparse.SparseContactSpace`.
     Condensers do not apply then.

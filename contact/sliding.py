@@ -182,7 +182,7 @@ class SlidingSolver:
             structure = replace(structure, contact_operator=G, area=pairing.area,
                                 initial_overclosure=pairing.initial_overclosure)
         if space is None:
-            # the same bodies (dense or sparse) with the new pairing; their factors are kept
+            # the same bodies (dense or sparse) with the new pairing; a sparse space keeps its bodies' factor
             space = self.solver.space.repaired(structure) if hasattr(self, "solver") else space_of(structure)
         self.pairing, self.paired_at = pairing, displacement
         self.solver = ContactSolver(space, self.law, self.settings)

@@ -128,7 +128,7 @@ def loosening_window_blocks(history: list, procedure) -> int:
     ``loosening_window`` blocks, or with ``loosening_window_cycles`` the blocks of the last that
     many real cycles (at least ``loosening_window`` of them), one block before the window
     included so that it spans the whole span (a history shorter than the window: all of it)."""
-    span = getattr(procedure, "loosening_window_cycles", None)
+    span = procedure.loosening_window_cycles
     least = max(procedure.loosening_window, 1)
     if span is None or not history:
         return least
@@ -153,7 +153,7 @@ def loosening_evident(history: list, procedure) -> bool:
     wear_cycles = [c for c in history if c.phase == "wear" and c.clamp_force is not None]
     if len(wear_cycles) < procedure.loosening_window:
         return False
-    span = getattr(procedure, "loosening_window_cycles", None)
+    span = procedure.loosening_window_cycles
     if span is not None and wear_cycles[-1].equivalent_cycles - wear_cycles[0].equivalent_cycles < span:
         return False  # the wear phase does not span the window yet
     recent = wear_cycles[-loosening_window_blocks(wear_cycles, procedure):]

@@ -10,12 +10,14 @@ finer level and its limit is within ``limit_tolerance`` of the finest level's.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import asdict, dataclass, field
 from itertools import pairwise
 from pathlib import Path
 
 import h5py
+import numpy as np
 
 from reduction.errors import InputError
 
@@ -129,7 +131,7 @@ def run_level(scene_path: str, size_mm: float, out_dir: str, cache_dir: str | No
                            cache_dir=cache_dir, workers=0, progress=False)
         level.limit_mm, level.monotone = limit.limit_mm, limit.monotone
         level.extra["limit_bracket_mm"] = list(limit.bracket_mm)
-        level.extra["limit_runs"] = limit.to_json().get("runs")
+        level.extra["limit_runs"] = limit.to_json()["runs"]
     return level
 
 
@@ -162,11 +164,7 @@ def figures_at_cycles(results_path, cycles: float) -> dict:
     from its results.h5; a run that shook down earlier keeps its last figures (a stuck joint
     stays as it is). The clamp-force loss is relative to the clamp force the run's own loss
     refers to."""
-    import numpy as np
-
     with h5py.File(results_path, "r") as results:
-        import json
-
         final = json.loads(results["summary"].attrs["figures"])
         table = results["cycles"]
         real = table["equivalent_cycles"][()]
@@ -237,8 +235,9 @@ def plot_convergence(study: dict, path: Path) -> Path:
     if found:
         limits = axes[1, 0]
         limits.plot(*zip(*found), marker="s", color="k", label="amplitude limit (lowest not stuck)")
-        stuck = [(level["size_mm"], 1e3 * level["extra"]["limit_bracket_mm"][0]) for level in levels
-                 if level["limit_mm"] is not None and (level["extra"].get("limit_bracket_mm") or [None])[0] is not None]
+        brackets = [(level["size_mm"], level["extra"].get("limit_bracket_mm", [None])[0]) for level in levels
+                    if level["limit_mm"] is not None]
+        stuck = [(size, 1e3 * below) for size, below in brackets if below is not None]
         if stuck:
             limits.plot(*zip(*stuck), marker="v", linestyle="none", color="tab:green",
                         label="highest stuck below it")
