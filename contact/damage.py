@@ -24,6 +24,7 @@ Pure functions of arrays, vectorised over points and facets. Units: mm, MPa; FDP
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 
 def surface_strain(coordinates: np.ndarray, facets: np.ndarray, displacement: np.ndarray) -> np.ndarray:
@@ -35,29 +36,48 @@ def surface_strain(coordinates: np.ndarray, facets: np.ndarray, displacement: np
     projected onto the facet's tangent plane and symmetrised; each node averages the facets
     around it weighted by their size. The tensor has no normal components (ε·n = 0).
     """
-    x, u = coordinates[facets], displacement[facets]  # (m, k, dim)
-    if facets.shape[1] == 4:  # the bilinear map's derivatives at the centre
-        d_xi, d_eta = np.array([-1.0, 1.0, 1.0, -1.0]) / 4, np.array([-1.0, -1.0, 1.0, 1.0]) / 4
-        J = np.stack([d_xi @ x, d_eta @ x], axis=-1)
-        Ju = np.stack([d_xi @ u, d_eta @ u], axis=-1)
-    else:  # lines and triangles: edges from the first node, (m, dim, k-1)
-        J = np.swapaxes(x[:, 1:] - x[:, :1], 1, 2)
-        Ju = np.swapaxes(u[:, 1:] - u[:, :1], 1, 2)
-    metric = np.swapaxes(J, 1, 2) @ J  # (m, k-1, k-1)
-    inverse_metric = np.linalg.inv(metric)
-    pseudo_inverse = inverse_metric @ np.swapaxes(J, 1, 2)  # (m, k-1, dim): tangent coordinates
-    gradient = Ju @ pseudo_inverse  # ∇_s u, (m, dim, dim): zero along the facet normal
-    projector = J @ pseudo_inverse  # onto the facet's tangent plane
-    in_plane = projector @ gradient
-    strain = 0.5 * (in_plane + np.swapaxes(in_plane, 1, 2))
-    size = np.sqrt(np.linalg.det(metric))
     n, dim = coordinates.shape
-    total = np.zeros((n, dim, dim))
+    return (surface_strain_operator(coordinates, facets) @ displacement.ravel()).reshape(n, dim, dim)
+
+
+def surface_strain_operator(coordinates: np.ndarray, facets: np.ndarray) -> sp.csr_matrix:
+    """The linear map of :func:`surface_strain`, sparse (n·dim·dim, n·dim): the strain of
+    nodal displacements u (n, dim) mm is ``(S @ u.ravel()).reshape(n, dim, dim)``."""
+    n, dim = coordinates.shape
+    m, k = facets.shape
+    x = coordinates[facets]  # (m, k, dim)
+    if k == 4:  # the bilinear map's derivatives at the centre
+        derivative = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]) / 4  # (k, 2)
+    else:  # lines and triangles: edges from the first node
+        derivative = np.vstack([-np.ones((1, k - 1)), np.eye(k - 1)])  # (k, k-1)
+    J = np.einsum("mkd,ka->mda", x, derivative)  # (m, dim, k-1)
+    metric = np.swapaxes(J, 1, 2) @ J  # (m, k-1, k-1)
+    pseudo_inverse = np.linalg.inv(metric) @ np.swapaxes(J, 1, 2)  # (m, k-1, dim): tangent coordinates
+    projector = J @ pseudo_inverse  # onto the facet's tangent plane, (m, dim, dim)
+    size = np.sqrt(np.linalg.det(metric))
     weight = np.zeros(n)
-    for corner in range(facets.shape[1]):  # k passes, each vectorised over the facets
-        np.add.at(total, facets[:, corner], size[:, None, None] * strain)
+    for corner in range(k):
         np.add.at(weight, facets[:, corner], size)
-    return total / np.maximum(weight, np.finfo(float).tiny)[:, None, None]
+    weight = np.maximum(weight, np.finfo(float).tiny)
+    # ∇_s u of a unit displacement of corner c along axis d is e_d ⊗ (derivative[c]·pseudo_inverse);
+    # projected onto the tangent plane and symmetrised, it is the facet's strain of that unit motion
+    rows, cols, vals = [], [], []
+    pair = np.arange(dim * dim).reshape(dim, dim)
+    for c in range(k):
+        row_of_c = np.einsum("a,mad->md", derivative[c], pseudo_inverse)  # (m, dim)
+        for d in range(dim):
+            in_plane = projector[:, :, d, None] * row_of_c[:, None, :]  # P·(e_d ⊗ g), (m, dim, dim)
+            strain = 0.5 * (in_plane + np.swapaxes(in_plane, 1, 2))
+            for corner in range(k):  # averaged to every node of the facet, by size
+                node = facets[:, corner]
+                share = (size / weight[node])[:, None, None] * strain
+                rows.append((node[:, None, None] * dim * dim + pair[None]).ravel())
+                cols.append(np.repeat(facets[:, c] * dim + d, dim * dim))
+                vals.append(share.ravel())
+    operator = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                             shape=(n * dim * dim, n * dim))
+    operator.sum_duplicates()
+    return operator
 
 
 def tangential_stress(strain: np.ndarray, direction: np.ndarray, pressure: np.ndarray,
@@ -115,11 +135,12 @@ class DamageTracker:
 
     def __init__(self, coordinates, facets, tangents, young: float, poisson: float):
         self.coordinates, self.facets, self.tangents = coordinates, facets, tangents
+        self._strain = surface_strain_operator(coordinates, facets)
         self.young, self.poisson = young, poisson
         self.largest = np.full(len(coordinates), -np.inf)
 
     def record(self, displacement: np.ndarray, pressure: np.ndarray, shear: np.ndarray) -> np.ndarray:
-        strain = surface_strain(self.coordinates, self.facets, displacement)
+        strain = (self._strain @ displacement.ravel()).reshape(len(self.coordinates), *displacement.shape[1:] * 2)
         sigma = tangential_stress(strain, slip_direction(shear, self.tangents), pressure,
                                   self.young, self.poisson)
         self.largest = np.maximum(self.largest, sigma)

@@ -25,6 +25,7 @@ released by wear. Units: mJ = N·mm.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -54,16 +55,34 @@ class WorkOperators:
             if name in structure.loads:
                 loads[:, k] = structure.loads[name]
         B = np.hstack([loads[c], dense_block(K, c, p), dense_block(K, c, q)])
-        Y = space.solve_contact_block(B)
+        self._Y = Y = space.solve_contact_block(B)
         self.n_patterns, self.n_prescribed = len(patterns), p.size
         self.BtY = 0.5 * (B.T @ Y + Y.T @ B)
-        self.GY = np.asarray(space.Gc @ Y)
         self.load_q, self.load_p = loads[q], loads[p]
         self.Kqq, self.Kqp, self.Kpp = dense_block(K, q, q), dense_block(K, q, p), dense_block(K, p, p)
-        contact_p = structure.contact_operator[:, p]
+        self.motion = space.pattern_motion
+        self._pair(space)
+
+    def _pair(self, space: ContactSpace) -> None:
+        """The terms that depend on the pairing: G_c·K_cc⁻¹·B, G on the prescribed DOFs, W·λ."""
+        self._space = space
+        self.GY = np.asarray(space.Gc @ self._Y)
+        contact_p = space.structure.contact_operator[:, space.prescribed]
         self.Gp = contact_p.T.tocsr() if contact_p.nnz else None
         self.compliance = space.compliance  # W·λ (dense or sparse space)
-        self.motion = space.pattern_motion
+
+    def repaired(self, space: ContactSpace) -> WorkOperators:
+        """The operators of ``space``, a new pairing of the same bodies: only the pairing's
+        terms are formed again when it eliminates the same DOFs (else all are)."""
+        old = self._space
+        same = (space.structure.stiffness is old.structure.stiffness
+                and all(np.array_equal(getattr(space, name), getattr(old, name))
+                        for name in ("contact_dofs", "control_dofs", "prescribed")))
+        if not same:
+            return WorkOperators(space)
+        operators = copy.copy(self)
+        operators._pair(space)
+        return operators
 
     def work_terms(self, control: np.ndarray, forces: np.ndarray, amplitudes: np.ndarray):
         """(ℓ = Lᵀ·u per pattern (mm·N per unit amplitude), reaction forces of the supports at
@@ -110,7 +129,7 @@ class EnergyMeter:
         """Go on in ``space``, the contact space of a new pairing of the same bodies (finite
         sliding): the work operators are rebuilt for it; the sums and the work terms of the
         last increment (per pattern and prescribed DOF) carry over."""
-        self.space, self.operators = space, WorkOperators(space)
+        self.space, self.operators = space, self.operators.repaired(space)
 
     _MEMORY = ("amplitudes", "load_work", "reaction", "prescribed_motion")
 

@@ -36,7 +36,8 @@ _TRI_RULE = np.array([[1 / 3, 1 / 3, 9 / 40],
                       [_A1, _A1, _W1], [_A1, _B1, _W1], [_B1, _A1, _W1],
                       [_A2, _A2, _W2], [_A2, _B2, _W2], [_B2, _A2, _W2]])
 _GAUSS_1D = np.polynomial.legendre.leggauss(3)
-_COVERED = 1.0 - 1e-6  # a slave facet counts as covered above this fraction of its measure
+_COVERED = 1.0 - 1e-6
+_ALL_PAIRS = 40_000  # facet pairs below which candidates are found without a k-d tree  # a slave facet counts as covered above this fraction of its measure
 
 
 @dataclass(frozen=True)
@@ -71,16 +72,21 @@ def _candidates(slave, master) -> tuple[np.ndarray, np.ndarray]:
     s_centre, m_centre = s_vert.mean(axis=1), m_vert.mean(axis=1)
     s_radius = np.linalg.norm(s_vert - s_centre[:, None], axis=2).max(axis=1)
     m_radius = np.linalg.norm(m_vert - m_centre[:, None], axis=2).max(axis=1)
-    hits = cKDTree(m_centre).query_ball_point(s_centre, 1.5 * (s_radius + m_radius.max()))
-    s_idx = np.repeat(np.arange(len(hits)), [len(h) for h in hits])
-    m_idx = np.concatenate([np.asarray(h, dtype=int) for h in hits]) if len(hits) else np.zeros(0, int)
+    reach = 1.5 * (s_radius + m_radius.max())
+    if len(s_centre) * len(m_centre) <= _ALL_PAIRS:  # small surfaces: every pair, no tree
+        distance = np.linalg.norm(s_centre[:, None] - m_centre[None], axis=2)
+        s_idx, m_idx = np.nonzero(distance <= reach[:, None])
+    else:
+        hits = cKDTree(m_centre).query_ball_point(s_centre, reach)
+        s_idx = np.repeat(np.arange(len(hits)), [len(h) for h in hits])
+        m_idx = np.concatenate([np.sort(np.asarray(h, dtype=int)) for h in hits]) if len(hits) else np.zeros(0, int)
     facing = np.einsum("ij,ij->i", slave.facet_normals[s_idx], master.facet_normals[m_idx]) < 0.0
     return s_idx[facing], m_idx[facing]
 
 
-def _segments_2d(slave, master) -> MortarSegments:
-    """Mortar segments of 2D surfaces: master endpoints projected on the slave segment's line."""
-    s_idx, m_idx = _candidates(slave, master)
+def _segments_2d(slave, master, s_idx: np.ndarray, m_idx: np.ndarray) -> MortarSegments:
+    """Mortar segments of 2D surfaces: master endpoints projected on the slave segment's line
+    (candidate facet pairs ``s_idx``, ``m_idx``)."""
     a, b = slave.coordinates[slave.facets[s_idx, 0]], slave.coordinates[slave.facets[s_idx, 1]]
     c, d = master.coordinates[master.facets[m_idx, 0]], master.coordinates[master.facets[m_idx, 1]]
     edge = b - a
@@ -176,10 +182,10 @@ def _inverse_map(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
     return local
 
 
-def _segments_3d(slave, master) -> MortarSegments:
+def _segments_3d(slave, master, s_idx: np.ndarray, m_idx: np.ndarray) -> MortarSegments:
     """Mortar segments of 3D surfaces: master facets projected on each slave facet's plane,
-    clipped with it, fan-triangulated and integrated with a degree-5 rule."""
-    s_idx, m_idx = _candidates(slave, master)
+    clipped with it, fan-triangulated and integrated with a degree-5 rule (candidate facet
+    pairs ``s_idx``, ``m_idx``)."""
     origin, axes = _plane_frames(slave)
     origin, axes = origin[s_idx], axes[s_idx]
 
@@ -236,10 +242,11 @@ def dual_coefficients(coordinates: np.ndarray, facets: np.ndarray) -> np.ndarray
 
 def mortar_segments(slave, master) -> MortarSegments:
     """All mortar segments of two surfaces (same dimension), as quadrature points."""
-    if not _candidates(slave, master)[0].size:
+    s_idx, m_idx = _candidates(slave, master)
+    if not s_idx.size:
         raise InputError("the contact surfaces touch nothing of each other: no master facet faces a slave facet "
                          "within reach; check the contact selections (slave and master must face each other)")
-    return _segments_2d(slave, master) if slave.dim == 2 else _segments_3d(slave, master)
+    return (_segments_2d if slave.dim == 2 else _segments_3d)(slave, master, s_idx, m_idx)
 
 
 def mortar_matrices(slave, master, segments: MortarSegments | None = None):
@@ -281,8 +288,11 @@ def _drop_round_off(matrix: sp.csr_matrix) -> sp.csr_matrix:
     """Remove entries below 1e-12 of their row's largest (the zero off-diagonals of the
     biorthogonal D come out of the quadrature as round-off)."""
     matrix.sum_duplicates()
-    row_max = abs(matrix).max(axis=1).toarray().ravel()
-    matrix.data[np.abs(matrix.data) < 1e-12 * np.repeat(row_max, np.diff(matrix.indptr))] = 0.0
+    magnitude, lengths = np.abs(matrix.data), np.diff(matrix.indptr)
+    row_max = np.zeros(lengths.size)
+    filled = lengths > 0
+    row_max[filled] = np.maximum.reduceat(magnitude, matrix.indptr[:-1][filled])
+    matrix.data[magnitude < 1e-12 * np.repeat(row_max, lengths)] = 0.0
     matrix.eliminate_zeros()
     return matrix
 
@@ -313,8 +323,13 @@ def padded_rows(matrix: sp.csr_matrix, scale: np.ndarray) -> tuple[np.ndarray, n
 
 
 def _widen(columns: np.ndarray, values: np.ndarray, width: int) -> tuple[np.ndarray, np.ndarray]:
-    pad = width - columns.shape[1]
-    return np.pad(columns, ((0, 0), (0, pad))), np.pad(values, ((0, 0), (0, pad)))
+    """Pad (n, k) columns and values with zeros to (n, width)."""
+    if columns.shape[1] == width:
+        return columns, values
+    wide_columns = np.zeros((columns.shape[0], width), dtype=columns.dtype)
+    wide_values = np.zeros((values.shape[0], width))
+    wide_columns[:, :columns.shape[1]], wide_values[:, :values.shape[1]] = columns, values
+    return wide_columns, wide_values
 
 
 def mortar_pairing(slave, master, projection, segments: MortarSegments | None = None):

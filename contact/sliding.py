@@ -179,10 +179,13 @@ class SlidingSolver:
         structure = self.assembly.structure
         if pairing is not self.assembly.pairing:
             G = kinematic_operator(pairing, self._dofs["slave"], self._dofs["master"], structure.n_dofs)
+            # every re-pairing eliminates all DOFs of both surfaces, paired or not: the
+            # re-paired spaces then share the bodies' factor (ContactSpace.repaired)
+            surfaces = np.concatenate([self._dofs["slave"].ravel(), self._dofs["master"].ravel()])
             structure = replace(structure, contact_operator=G, area=pairing.area,
-                                initial_overclosure=pairing.initial_overclosure)
+                                initial_overclosure=pairing.initial_overclosure, surface_dofs=surfaces)
         if space is None:
-            # the same bodies (dense or sparse) with the new pairing; a sparse space keeps its bodies' factor
+            # the same bodies (dense or sparse) with the new pairing
             space = self.solver.space.repaired(structure) if hasattr(self, "solver") else space_of(structure)
         self.pairing, self.paired_at = pairing, displacement
         self.solver = ContactSolver(space, self.law, self.settings)

@@ -136,16 +136,17 @@ class SparseContactSpace(ContactSpace):
     The interface of :class:`contact.structure.ContactSpace` (E (n_rows, n_control) mm/mm,
     S_q (n_control, n_control) N/mm, ``driving``, ``compliance`` (W·λ), ``displacements``,
     ``normal_compliance``, ``linear_solver``, ...), with no ``W`` attribute. ``contact_dofs``
-    are all eliminated DOFs (interior included). factor: the sparse factor of K_cc of another
-    space of the same bodies (a new pairing), reused.
+    are all eliminated DOFs (interior included). A re-paired space (:meth:`repaired`) shares
+    the bodies' factor.
     """
 
-    def __init__(self, structure: Structure, factor=None):
-        self._reused = factor
+    def __init__(self, structure: Structure):
         super().__init__(structure)
-        del self._reused
         order = np.concatenate([self.contact_dofs, self.control_dofs])
         self._stiffness_cq = structure.stiffness.tocsr()[order][:, order].tocsr()
+
+    def _pair(self, structure: Structure) -> None:
+        super()._pair(structure)
         self._G_cq = sp.hstack([self.Gc, sp.csr_matrix((self.Gc.shape[0], self.control_dofs.size))], format="csr")
         self._GcT = self.Gc.T.tocsr()
         self._normal_compliance = None
@@ -159,12 +160,9 @@ class SparseContactSpace(ContactSpace):
         return np.setdiff1d(free, control), control
 
     def _factorise(self, stiffness, eliminated: np.ndarray):
-        """The sparse Cholesky factor of K_cc (PARDISO when installed), or the one reused."""
-        if self._reused is not None and np.array_equal(self._reused.index, eliminated):
-            return self._reused
-        factor = factorize(stiffness.tocsr()[eliminated][:, eliminated],
-                           label="stiffness of the bodies with their control points held")
-        return _IndexedFactor(factor.solve, eliminated)
+        """The sparse Cholesky factor of K_cc (PARDISO when installed)."""
+        return factorize(stiffness.tocsr()[eliminated][:, eliminated],
+                         label="stiffness of the bodies with their control points held")
 
     def _form_compliance(self) -> None:
         pass  # W stays implicit
@@ -198,10 +196,6 @@ class SparseContactSpace(ContactSpace):
             self._normal_compliance = diagonal
         return self._normal_compliance
 
-    def repaired(self, structure: Structure) -> SparseContactSpace:
-        """The space of the same bodies with a new pairing (finite sliding): K_cc's factor is reused."""
-        return SparseContactSpace(structure, factor=self._Kcc)
-
     def tangent_operators(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         """(K on the free DOFs in the order [c, q], with the locked bolts' stiffness in the
         control block, N/mm; G in that order): the uncondensed Newton matrix is
@@ -217,13 +211,6 @@ class SparseContactSpace(ContactSpace):
     def linear_solver(self, settings: KrylovSettings | None = None) -> SparseNewtonSolver:
         """The solver of this space's Newton corrections."""
         return SparseNewtonSolver(self, settings)
-
-
-class _IndexedFactor:
-    """A sparse factor's ``solve`` and the DOFs (``index``) whose block it factorises."""
-
-    def __init__(self, solve, index: np.ndarray):
-        self.solve, self.index = solve, index
 
 
 class SparseNewtonSolver:

@@ -43,6 +43,9 @@ class Structure:
     loads: name → (n,) force pattern, N. motions: name → (n,) displacement pattern, mm,
         nonzero only on prescribed DOFs. A load history scales each pattern in time.
     labels: name → DOF index, for control DOFs worth reporting (e.g. "cylinder.rp.uy").
+    surface_dofs: DOFs eliminated with the contact DOFs even where no point is paired with
+        them (finite sliding: the surfaces' DOFs, so that every pairing eliminates the same
+        set and a re-paired space keeps the bodies' factor), or None.
     """
 
     stiffness: np.ndarray
@@ -55,6 +58,7 @@ class Structure:
     motions: dict = field(default_factory=dict)
     labels: dict = field(default_factory=dict)
     bolts: object = None  # contact.bolts.BoltSet, or None without bolts
+    surface_dofs: np.ndarray | None = None
 
     @property
     def n_dofs(self) -> int:
@@ -114,16 +118,19 @@ class _BlockFactor:
         result = np.zeros((operator.shape[0], operator.shape[0]))
         columns = operator.tocsc()
         for block, inverse in zip(self.blocks, self.inverses):
-            part = columns[:, block]
-            touched = np.unique(part.tocoo().row)
+            # a block is a run of consecutive eliminated DOFs: its columns are one slice
+            part = columns[:, block[0]:block[-1] + 1]
+            touched = np.unique(part.indices)
             if touched.size == 0:
                 continue
-            rows = part[touched].tocsr()
-            # G·(G·K⁻¹)ᵀ = G·K⁻¹·Gᵀ (K⁻¹ symmetric), both products sparse times dense;
-            # symmetrised, as the round-off of the two sides is not
-            result[np.ix_(touched, touched)] += _symmetric(np.asarray(rows @ np.asarray(rows @ inverse).T))
-        return result
-
+            if 2 * touched.size < operator.shape[0]:  # a body few rows touch: those rows only
+                rows = part[touched].tocsr()
+                result[np.ix_(touched, touched)] += np.asarray(rows @ np.asarray(rows @ inverse).T)
+            else:
+                # G·(G·K⁻¹)ᵀ = G·K⁻¹·Gᵀ (K⁻¹ symmetric), both products sparse times dense
+                result += np.asarray(part @ np.asarray(part @ inverse).T)
+        # symmetrised, as the round-off of the two sides is not
+        return _symmetric(result)
 
 def _spd_inverse(matrix: np.ndarray) -> np.ndarray:
     """Inverse of a symmetric positive definite block, in place (C order: LAPACK sees Aᵀ = A)."""
@@ -195,13 +202,8 @@ class ContactSpace:
 
     def _eliminate(self, structure: Structure) -> None:
         self.structure = structure
-        n = structure.n_dofs
-        G = structure.contact_operator.tocsr()
         prescribed = np.asarray(structure.prescribed, dtype=int)
-        free = np.setdiff1d(np.arange(n), prescribed)
-        in_contact = np.zeros(n, dtype=bool)
-        in_contact[np.unique(G.indices)] = True
-        self.contact_dofs, self.control_dofs = self._split_free(free, in_contact)
+        self.contact_dofs, self.control_dofs = self._split(structure)
         self.prescribed = prescribed
         K = structure.stiffness
         c, q, p = self.contact_dofs, self.control_dofs, prescribed
@@ -209,11 +211,8 @@ class ContactSpace:
         self._Kcq = dense_block(K, c, q)
         # K_cp stays sparse with sparse bodies (held surface DOFs make many columns)
         self._Kcp = K[c][:, p].tocsr() if sp.issparse(K) else K[np.ix_(c, p)]
-        self.Gc = G[:, c].tocsr()
-        self._form_compliance()
-        compliance_Kcq = self.compliance_Kcq = self._Kcc.solve(self._Kcq)
-        self.E = np.asarray(self.Gc @ compliance_Kcq)
-        self.Sq = dense_block(K, q, q) - self._Kcq.T @ compliance_Kcq
+        self.compliance_Kcq = self._Kcc.solve(self._Kcq)
+        self.Sq = dense_block(K, q, q) - self._Kcq.T @ self.compliance_Kcq
         self.control_stiffness = np.zeros((q.size, q.size))  # locked bolts add to it
         self._Kqp = dense_block(K, q, p)
         # Each pattern, at unit amplitude, as a contact-space load: g_f and f_q columns.
@@ -229,9 +228,27 @@ class ContactSpace:
                 self.pattern_motion[:, k] = structure.motions[name][p]
         effective_c = self.pattern_force_c - self._Kcp @ self.pattern_motion
         self.compliance_f = self._Kcc.solve(effective_c)
-        self.pattern_gf = np.asarray(self.Gc @ self.compliance_f)
         self.pattern_fq = (self.pattern_force_q - self._Kqp @ self.pattern_motion
                            - self._Kcq.T @ self.compliance_f)
+        self._pair(structure)
+
+    def _split(self, structure: Structure) -> tuple[np.ndarray, np.ndarray]:
+        """(eliminated DOFs c, control DOFs q) of a structure's free DOFs."""
+        n = structure.n_dofs
+        free = np.setdiff1d(np.arange(n), np.asarray(structure.prescribed, dtype=int))
+        in_contact = np.zeros(n, dtype=bool)
+        in_contact[np.unique(structure.contact_operator.tocsr().indices)] = True
+        if structure.surface_dofs is not None:
+            in_contact[structure.surface_dofs] = True
+        return self._split_free(free, in_contact)
+
+    def _pair(self, structure: Structure) -> None:
+        """The operators that depend on the pairing: G_c, W, E and the pattern gaps g_f."""
+        self.structure = structure
+        self.Gc = structure.contact_operator.tocsr()[:, self.contact_dofs].tocsr()
+        self._form_compliance()
+        self.E = np.asarray(self.Gc @ self.compliance_Kcq)
+        self.pattern_gf = np.asarray(self.Gc @ self.compliance_f)
 
     def with_control_stiffness(self, extra: np.ndarray) -> "ContactSpace":
         """The same space with ``extra`` (n_control, n_control) N/mm added to the control
@@ -264,8 +281,24 @@ class ContactSpace:
         return np.diagonal(self.W)[0::self.structure.dim].copy()
 
     def repaired(self, structure: Structure) -> ContactSpace:
-        """The space of ``structure``, the same bodies with a new pairing (finite sliding)."""
-        return ContactSpace(structure)
+        """The space of ``structure``, the same bodies with a new pairing (finite sliding).
+
+        When the bodies, supports and patterns are this space's and the new pairing
+        eliminates the same DOFs (``Structure.surface_dofs`` keeps them fixed), only the
+        pairing's operators are formed again (G_c, W, E, g_f): K_cc's factor, S_q and the
+        load images are shared. Otherwise the space is built anew."""
+        old = self.structure
+        same_bodies = (structure.stiffness is old.stiffness and structure.loads is old.loads
+                       and structure.motions is old.motions
+                       and np.array_equal(structure.prescribed, self.prescribed))
+        if same_bodies:
+            contact_dofs, control_dofs = self._split(structure)
+            if np.array_equal(contact_dofs, self.contact_dofs) and np.array_equal(control_dofs, self.control_dofs):
+                space = copy.copy(self)
+                with single_threaded_blas():
+                    space._pair(structure)
+                return space
+        return type(self)(structure)
 
     def linear_solver(self, settings=None):
         """The solver of this space's Newton corrections (:class:`contact.linear.NewtonLinearSolver`)."""

@@ -39,6 +39,7 @@ from pipelines import scene as scenes  # noqa: E402
 from pipelines.build import build  # noqa: E402
 from pipelines.coupling import multibody_loading  # noqa: E402
 from pipelines.jobs.run import run_model  # noqa: E402
+from reduction.threads import pin_process  # noqa: E402
 
 #: the linear solvers a run can be asked for: the shipped choice, and the exact dense LU of
 #: the bordered closed system in every Newton iteration (the reference for equal results)
@@ -67,6 +68,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="auto: the shipped choice; dense: exact LU of the dense system every iteration")
     parser.add_argument("--fields", type=Path, default=None, help="write the final fields here (.npz)")
     args = parser.parse_args(argv)
+    pin_process()  # as the command line does
     path = ROOT / "examples" / f"{args.scene}.toml"
     scene = scenes.load(path, overrides(path, args.size, args.cycles))
     start_cpu, start = time.process_time(), time.perf_counter()

@@ -163,3 +163,43 @@ def test_3d_block_slid_off_its_partner_is_carried_by_the_overlap():
     assert solver.repairs > 0
     assert x[normal > 0].max() == pytest.approx(overlap_edge, abs=row)
     assert solver.area[normal > 0].sum() == pytest.approx(10.0 * (10.0 - 1.5), abs=10.0 * row)
+
+
+def test_re_paired_space_shares_the_bodies_and_equals_one_built_anew():
+    """Re-pairing forms only the pairing's operators again: G_c, W, E and g_f of the re-paired
+    space, and the energy meter's work operators, equal those of a space built from scratch for
+    the same pairing (to round-off of W's scale), while K_cc's factor, S_q and the load images
+    are shared."""
+    from dataclasses import replace as replaced
+
+    from contact.energy import WorkOperators
+    from contact.sliding import sliding_state
+    from contact.structure import ContactSpace
+
+    model = build(scenes.load(SCENE, {"contact.sliding": "finite"}))
+    solver = SlidingSolver(model.assembly, model.law, model.settings, mode="finite")
+    meter = EnergyMeter(solver.space, model.law)
+    solver.listeners.append(meter.follow)
+    state = sliding_state(model.initial_state())
+    slide = np.zeros(model.assembly.structure.n_dofs)
+    slide[solver._dofs["slave"][:, 0]] = 1.0  # the cylinder's surface moved along the flat, mm
+    spaces = []
+    for stroke in (0.3, 0.45):  # mm, 3 and 4.5 elements
+        solver._repair(stroke * slide, solver.initial_equilibrium(), state)
+        spaces.append(solver.space)
+    first, second = spaces
+    assert second._Kcc is first._Kcc and second.Sq is first.Sq
+    assert abs(second.Gc - first.Gc).max() > 0.1  # paired with other master nodes
+    fresh = ContactSpace(second.structure)
+    scale = np.abs(fresh.W).max()
+    np.testing.assert_allclose(second.W, fresh.W, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(second.E, fresh.E, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(second.pattern_gf, fresh.pattern_gf, rtol=0, atol=1e-12 * np.abs(fresh.pattern_gf).max())
+    # the same pairing with the unpaired surface nodes left as control DOFs is another exact
+    # elimination: the pairing's columns differ, the body factor is built for it
+    plain = first.repaired(replaced(second.structure, surface_dofs=None))
+    assert plain._Kcc is not first._Kcc and plain.n_control > second.n_control
+    operators = WorkOperators(second)
+    for name in ("BtY", "GY", "Kqq", "load_p"):
+        np.testing.assert_allclose(getattr(meter.operators, name), getattr(operators, name), rtol=0,
+                                   atol=1e-12 * max(np.abs(getattr(operators, name)).max(), 1e-300))
