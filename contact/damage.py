@@ -44,7 +44,7 @@ def surface_strain_operator(coordinates: np.ndarray, facets: np.ndarray) -> sp.c
     """The linear map of :func:`surface_strain`, sparse (n·dim·dim, n·dim): the strain of
     nodal displacements u (n, dim) mm is ``(S @ u.ravel()).reshape(n, dim, dim)``."""
     n, dim = coordinates.shape
-    m, k = facets.shape
+    k = facets.shape[1]
     x = coordinates[facets]  # (m, k, dim)
     if k == 4:  # the bilinear map's derivatives at the centre
         derivative = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]) / 4  # (k, 2)
