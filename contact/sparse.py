@@ -148,7 +148,6 @@ class SparseContactSpace(ContactSpace):
     def _pair(self, structure: Structure) -> None:
         super()._pair(structure)
         self._G_cq = sp.hstack([self.Gc, sp.csr_matrix((self.Gc.shape[0], self.control_dofs.size))], format="csr")
-        self._GcT = self.Gc.T.tocsr()
         self._normal_compliance = None
 
     def _split_free(self, free: np.ndarray, in_contact: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

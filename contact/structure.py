@@ -246,6 +246,7 @@ class ContactSpace:
         """The operators that depend on the pairing: G_c, W, E and the pattern gaps g_f."""
         self.structure = structure
         self.Gc = structure.contact_operator.tocsr()[:, self.contact_dofs].tocsr()
+        self._GcT = self.Gc.T.tocsr()
         self._form_compliance()
         self.E = np.asarray(self.Gc @ self.compliance_Kcq)
         self.pattern_gf = np.asarray(self.Gc @ self.compliance_f)
@@ -325,7 +326,7 @@ class ContactSpace:
         u = np.zeros(s.n_dofs)
         motion = self.pattern_motion @ amplitudes
         rhs = (self.pattern_force_c @ amplitudes - self._Kcp @ motion - self._Kcq @ control
-               - self.Gc.T @ forces)
+               - self._GcT @ forces)
         u[self.contact_dofs] = self._Kcc.solve(rhs)
         u[self.control_dofs] = control
         u[self.prescribed] = motion

@@ -51,9 +51,13 @@ def blas_threads(limit: int):
     """BLAS (OpenBLAS, MKL) limited to ``limit`` threads inside the block.
 
     Nothing to do (and nothing spent: setting a limit costs about 0.1 ms, a tenth of a small
-    contact increment) when the process is pinned to that many threads and has loaded no
-    module since."""
-    if _pinned == (len(sys.modules), limit):
+    contact increment) when the process is pinned to that many threads; if modules were
+    loaded since, the process is pinned again first (their BLAS too)."""
+    global _pinned
+    if _pinned is not None and _pinned[1] == limit:
+        if _pinned[0] != len(sys.modules):  # a module loaded since may have brought a BLAS
+            blas_controller().limit(limits=limit, user_api="blas")
+            _pinned = (len(sys.modules), limit)
         yield
         return
     with blas_controller().limit(limits=limit, user_api="blas"):
