@@ -36,8 +36,8 @@ _TRI_RULE = np.array([[1 / 3, 1 / 3, 9 / 40],
                       [_A1, _A1, _W1], [_A1, _B1, _W1], [_B1, _A1, _W1],
                       [_A2, _A2, _W2], [_A2, _B2, _W2], [_B2, _A2, _W2]])
 _GAUSS_1D = np.polynomial.legendre.leggauss(3)
-_COVERED = 1.0 - 1e-6
-_ALL_PAIRS = 40_000  # facet pairs below which candidates are found without a k-d tree  # a slave facet counts as covered above this fraction of its measure
+_COVERED = 1.0 - 1e-6  # a slave facet counts as covered above this fraction of its measure
+_ALL_PAIRS = 40_000  # facet pairs below which candidates are found without a k-d tree
 
 
 @dataclass(frozen=True)

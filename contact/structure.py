@@ -132,6 +132,7 @@ class _BlockFactor:
         # symmetrised, as the round-off of the two sides is not
         return _symmetric(result)
 
+
 def _spd_inverse(matrix: np.ndarray) -> np.ndarray:
     """Inverse of a symmetric positive definite block, in place (C order: LAPACK sees Aᵀ = A)."""
     matrix = np.ascontiguousarray(matrix)
