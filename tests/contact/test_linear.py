@@ -78,3 +78,61 @@ def test_gmres_history_ends_where_the_exact_lu_ends():
     for key, exact in fields["exact"].items():
         difference = np.max(np.abs(fields["gmres"][key] - exact)) / np.max(np.abs(exact))
         assert difference <= 1e-8, f"{key} differs by {difference:.2e}"
+
+
+def test_kept_preconditioners_end_where_the_exact_lu_ends():
+    """Gross slip over three cycles, the slip reversing every half cycle: with several
+    preconditioners kept (each solve takes the one formed at the nearest tangent), the
+    history still ends where the exact LU ends, to 1e-8."""
+    case = flat_on_flat(8, layers=3, slip_amplitude=2e-2, cycles=3)
+    structure = assemble(case.bodies, case.slave, case.master, loads=case.loads, motions=case.motions).structure
+    fields = {}
+    for name, linear in (("kept", KrylovSettings(direct_below=0, factors_kept=16)),
+                         ("exact", KrylovSettings(direct_below=np.inf))):
+        solver = ContactSolver(ContactSpace(structure), case.law, NewtonSettings(linear=linear))
+        equilibrium, state = solver.initial_equilibrium(), case.initial_state(structure.n_points)
+        for amplitudes in case.history:
+            equilibrium, state, _, _ = solver.increment(equilibrium, state, amplitudes, case.effects)
+        traction = equilibrium.forces.reshape(-1, 3) / solver.area[:, None]
+        fields[name] = {"pressure": traction[:, 0], "shear": traction[:, 1:], "cof": state.cof}
+        if name == "kept":
+            assert len(solver.linear._pool.factors) > 1  # more than one was kept and chosen from
+    for key, exact in fields["exact"].items():
+        difference = np.max(np.abs(fields["kept"][key] - exact)) / np.max(np.abs(exact))
+        assert difference <= 1e-8, f"{key} differs by {difference:.2e}"
+
+
+def test_pool_chooses_the_preconditioner_of_the_nearest_tangent_that_covers_the_closed_points():
+    from contact.linear import _Factor, _Pool
+
+    n, dim = 6, 3
+    rng = np.random.default_rng(3)
+    tangents = [rng.normal(size=(n, dim, dim)) for _ in range(3)]
+    pool = _Pool()
+    pool.size = 3
+    covered = [np.arange(n), np.arange(n), np.arange(3)]  # the third covers points 0-2 only
+    factors = []
+    for blocks, points in zip(tangents, covered):
+        factors.append(_Factor(np.eye(2), np.arange(2), points, blocks[points].copy(), np.ones(0), 1.0))
+        pool.add(factors[-1], n)
+    near_second = tangents[1] + 1e-3 * rng.normal(size=(n, dim, dim))
+    assert pool.nearest(near_second, np.arange(n)) is factors[1]
+    # the third is nearest on its points but does not cover point 4
+    near_third = tangents[0].copy()
+    near_third[:3] = tangents[2][:3]
+    assert pool.nearest(near_third, np.array([0, 4])) is not factors[2]
+    only_third = np.zeros((n, dim, dim))
+    only_third[:3] = tangents[2][:3]  # points 3-5 open: the third is exact, and covers 0 and 1
+    assert pool.nearest(only_third, np.array([0, 1])) is factors[2]
+    # equal distance: the most recently used
+    pool = _Pool()
+    pool.size = 2
+    twins = [_Factor(np.eye(2), np.arange(2), np.arange(n), tangents[0].copy(), np.ones(0), 1.0) for _ in range(2)]
+    for twin in twins:
+        pool.add(twin, n)
+    assert pool.nearest(tangents[0], np.arange(n)) is twins[1]
+    # beyond its size, the least recently used goes
+    pool.nearest(tangents[0], np.arange(n))
+    third = _Factor(np.eye(2), np.arange(2), np.arange(n), tangents[2].copy(), np.ones(0), 1.0)
+    pool.add(third, n)
+    assert third in pool.factors and twins[0] not in pool.factors
