@@ -62,22 +62,29 @@ def test_newton_correction_equals_the_dense_solve(flat, direct_below, opened):
     assert np.max(np.abs(got - expected)) <= 1e-8 * scale
 
 
+def _history_end(case, linear: KrylovSettings):
+    """Pressure, shear and COF (MPa, MPa, -) at the end of the case's history, and the solver."""
+    structure = assemble(case.bodies, case.slave, case.master, loads=case.loads, motions=case.motions).structure
+    solver = ContactSolver(ContactSpace(structure), case.law, NewtonSettings(linear=linear))
+    equilibrium, state = solver.initial_equilibrium(), case.initial_state(structure.n_points)
+    for amplitudes in case.history:
+        equilibrium, state, _, _ = solver.increment(equilibrium, state, amplitudes, case.effects)
+    traction = equilibrium.forces.reshape(-1, 3) / solver.area[:, None]
+    return {"pressure": traction[:, 0], "shear": traction[:, 1:], "cof": state.cof}, solver
+
+
+def _assert_equal_to_the_exact_lu(case, fields: dict) -> None:
+    exact_fields, _ = _history_end(case, KrylovSettings(direct_below=np.inf))
+    for key, exact in exact_fields.items():
+        difference = np.max(np.abs(fields[key] - exact)) / np.max(np.abs(exact))
+        assert difference <= 1e-8, f"{key} differs by {difference:.2e}"
+
+
 def test_gmres_history_ends_where_the_exact_lu_ends():
     case = flat_on_flat(8, layers=3)
-    structure = assemble(case.bodies, case.slave, case.master, loads=case.loads, motions=case.motions).structure
-    fields = {}
-    for name, linear in (("gmres", KrylovSettings(direct_below=0)), ("exact", KrylovSettings(direct_below=np.inf))):
-        solver = ContactSolver(ContactSpace(structure), case.law, NewtonSettings(linear=linear))
-        equilibrium, state = solver.initial_equilibrium(), case.initial_state(structure.n_points)
-        for amplitudes in case.history:
-            equilibrium, state, _, _ = solver.increment(equilibrium, state, amplitudes, case.effects)
-        traction = equilibrium.forces.reshape(-1, 3) / solver.area[:, None]
-        fields[name] = {"pressure": traction[:, 0], "shear": traction[:, 1:], "cof": state.cof}
-        if name == "gmres":
-            assert solver.linear.counters.solves > 0 and solver.linear.counters.direct_solves == 0
-    for key, exact in fields["exact"].items():
-        difference = np.max(np.abs(fields["gmres"][key] - exact)) / np.max(np.abs(exact))
-        assert difference <= 1e-8, f"{key} differs by {difference:.2e}"
+    fields, solver = _history_end(case, KrylovSettings(direct_below=0))
+    assert solver.linear.counters.solves > 0 and solver.linear.counters.direct_solves == 0
+    _assert_equal_to_the_exact_lu(case, fields)
 
 
 def test_kept_preconditioners_end_where_the_exact_lu_ends():
@@ -85,21 +92,9 @@ def test_kept_preconditioners_end_where_the_exact_lu_ends():
     preconditioners kept (each solve takes the one formed at the nearest tangent), the
     history still ends where the exact LU ends, to 1e-8."""
     case = flat_on_flat(8, layers=3, slip_amplitude=2e-2, cycles=3)
-    structure = assemble(case.bodies, case.slave, case.master, loads=case.loads, motions=case.motions).structure
-    fields = {}
-    for name, linear in (("kept", KrylovSettings(direct_below=0, factors_kept=16)),
-                         ("exact", KrylovSettings(direct_below=np.inf))):
-        solver = ContactSolver(ContactSpace(structure), case.law, NewtonSettings(linear=linear))
-        equilibrium, state = solver.initial_equilibrium(), case.initial_state(structure.n_points)
-        for amplitudes in case.history:
-            equilibrium, state, _, _ = solver.increment(equilibrium, state, amplitudes, case.effects)
-        traction = equilibrium.forces.reshape(-1, 3) / solver.area[:, None]
-        fields[name] = {"pressure": traction[:, 0], "shear": traction[:, 1:], "cof": state.cof}
-        if name == "kept":
-            assert len(solver.linear._pool.factors) > 1  # more than one was kept and chosen from
-    for key, exact in fields["exact"].items():
-        difference = np.max(np.abs(fields["kept"][key] - exact)) / np.max(np.abs(exact))
-        assert difference <= 1e-8, f"{key} differs by {difference:.2e}"
+    fields, solver = _history_end(case, KrylovSettings(direct_below=0, factors_kept=16))
+    assert len(solver.linear._pool.factors) > 1  # more than one was kept and chosen from
+    _assert_equal_to_the_exact_lu(case, fields)
 
 
 def test_pool_chooses_the_preconditioner_of_the_nearest_tangent_that_covers_the_closed_points():
