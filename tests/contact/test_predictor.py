@@ -1,0 +1,78 @@
+"""The cyclic predictors of Newton (contact/solver.py): the equilibrium last solved for the same
+load step, and the extrapolation of the last two.
+
+A triangular tangential cycle passes every level twice, rising and falling; with friction the
+two equilibria differ, so a predictor keyed by the load level alone starts the falling branch
+from the rising one. Keyed by the load step, a steady cycle is solved by its predictor.
+"""
+
+import numpy as np
+import pytest
+
+from contact.assembly import assemble
+from contact.solver import ContactSolver, Effects, _extrapolation_factor
+from contact.structure import ContactSpace
+from tests.bench.bench_report import flat_on_flat
+
+
+@pytest.fixture(scope="module")
+def flat():
+    # a stroke of ±5 µm (γ_crit = 1 µm) in four increments a cycle: 0 falling, −δ, 0 rising, +δ
+    case = flat_on_flat(6, layers=3, cycles=4, slip_amplitude=5e-3, increments_per_quarter=1)
+    structure = assemble(case.bodies, case.slave, case.master, loads=case.loads, motions=case.motions).structure
+    return case, ContactSpace(structure)
+
+
+def _run(case, space, effects: Effects, forget: bool = False):
+    """Forces (N) and Newton iterations of every increment of the case's history; with
+    ``forget`` the solver forgets its predictors before every increment."""
+    solver = ContactSolver(space, case.law)
+    equilibrium, state = solver.initial_equilibrium(), case.initial_state(space.structure.n_points)
+    forces, iterations = [], []
+    for amplitudes in case.history:
+        if forget:
+            solver.forget_cached_factorisations()
+        equilibrium, state, _, stats = solver.increment(equilibrium, state, amplitudes, effects)
+        forces.append(equilibrium.forces)
+        iterations.append(stats.iterations)
+    return np.array(forces), np.array(iterations)
+
+
+def test_a_steady_cycle_is_solved_by_its_predictor_on_the_rising_and_the_falling_branch(flat):
+    case, space = flat
+    forces, iterations = _run(case, space, Effects())  # constant COF: steady after one cycle
+    per_cycle = 4
+    last, before = forces[-per_cycle:], forces[-2 * per_cycle:-per_cycle]
+    scale = np.max(np.abs(last))
+    assert np.max(np.abs(last - before)) <= 1e-6 * scale  # the physics: a steady cycle
+    friction = last.reshape(per_cycle, -1, 3)[:, :, 1:].sum(axis=1)  # (increment, 2) N
+    # at the same load (no stroke) the falling and the rising branch hold opposite friction
+    # forces, a tenth of the largest or more
+    along = np.argmax(np.abs(friction).max(axis=0))  # the stroke's direction
+    total = friction[:, along]
+    assert total[0] * total[2] < 0.0 and min(abs(total[0]), abs(total[2])) > 0.1 * np.max(np.abs(total))
+    # each increment of the last two cycles converges in one Newton step from its predictor;
+    # without the predictors (forgotten every increment) it takes more
+    assert np.all(iterations[-2 * per_cycle:] == 1), iterations[-2 * per_cycle:]
+    _, without = _run(case, space, Effects(), forget=True)
+    assert np.all(without[-2 * per_cycle:] > 1), without[-2 * per_cycle:]
+
+
+def test_the_predictors_do_not_change_the_answer(flat):
+    case, space = flat
+    effects = Effects(cof_evolution=True)
+    remembered, iterations = _run(case, space, effects)
+    forgotten, iterations_forgotten = _run(case, space, effects, forget=True)
+    scale = np.max(np.abs(forgotten))
+    assert np.max(np.abs(remembered - forgotten)) <= 1e-8 * scale
+    assert iterations[-8:].sum() < iterations_forgotten[-8:].sum()
+
+
+def test_extrapolation_factor_follows_the_wear_gap():
+    before = np.array([0.0, 1e-3, 2e-3])
+    step = np.array([1e-4, 2e-4, 0.0])
+    assert _extrapolation_factor(before, before + step, before + 3 * step) == pytest.approx(2.0)
+    assert _extrapolation_factor(before, before + step, before + step) == 0.0
+    assert _extrapolation_factor(0.0, 0.0, 0.0) == 1.0  # no wear: the step between the two
+    assert _extrapolation_factor(before, before + step, before - step) == 0.0  # never backwards
+
