@@ -109,11 +109,13 @@ class IncrementStats:
     substeps: int = 0
 
 
-def _load_step(start: np.ndarray, target: np.ndarray) -> bytes:
-    """The key of a load step: where it starts and where it ends. The end alone is not
-    enough: a harmonic load passes every level twice a cycle, rising and falling, and with
-    friction the two equilibria differ."""
-    return np.asarray(start, dtype=float).tobytes() + np.asarray(target, dtype=float).tobytes()
+def _load_step(start: np.ndarray | None, target: np.ndarray) -> bytes:
+    """The key of a load step: where it starts and where it ends (``start`` None: the load
+    level ``target`` however it was reached). The level alone does not name a point of a
+    cycle: a harmonic load passes every level twice, rising and falling, and with friction
+    the two equilibria differ."""
+    end = np.asarray(target, dtype=float).tobytes()
+    return end if start is None else np.asarray(start, dtype=float).tobytes() + end
 
 
 def _extrapolation_factor(before_gap, earlier_gap, gap) -> float:
@@ -341,29 +343,31 @@ class ContactSolver:
         (:meth:`_pressure_shift`): with a large cycle jump one increment wears as deep as the
         penalty penetration, and from the half-open interface of an unshifted predictor the
         first Newton step overshoots and is cut to a sliver by the line search (the
-        cylinder-on-plane scene: 3.6 residuals per Newton iteration). A third, under a cyclic
-        load, is the equilibrium last solved for the same load step (the same point of the
-        previous cycle; pressed again against the current gap): in a steady cycle it is nearly
-        the answer, where the other two start from the previous increment's load. A fourth
-        extrapolates the last two solved for that step, by the wear gap's change since the
-        later one in units of its change between them: under wear, or an evolving COF, the
-        cycles drift, and the drift is smooth from cycle to cycle (the adaptive jump keeps it
-        so). The counterweight's wear phase (10 mm): 4.5 → 2.8 Newton iterations per
-        increment."""
+        cylinder-on-plane scene: 3.6 residuals per Newton iteration). The others recall
+        earlier equilibria, pressed again against the current gap. Once a load step (the same
+        start and end) has been solved twice, the load is cyclic: the third is the last
+        equilibrium of that step (the same point of the previous cycle; in a steady cycle
+        nearly the answer, where the first two start from the previous increment's load) and
+        the fourth extrapolates the last two, by the wear gap's change since the later one in
+        units of its change between them: under wear or an evolving COF the cycles drift,
+        smoothly from one to the next (the adaptive jump keeps it so). Before that, the third
+        is the last equilibrium at the same load level, however it was reached. The
+        counterweight's wear phase (10 mm): 4.5 → 2.8 Newton iterations per increment."""
         shift = self._pressure_shift(start, state)
         candidates = [(start.kinematics + shift, start.control),
                       (start.kinematics + shift + (g_f - self.space.driving(start.amplitudes)[0]), start.control)]
         solved = self._solved_at.get(_load_step(start.amplitudes, amplitudes))
-        if solved is not None:
+        if solved is not None and solved[1][0] is not None:  # a step solved twice before: a cycle
             (earlier, earlier_gap), (before, before_gap) = solved
-            candidates.append((earlier.kinematics + self._pressure_shift(earlier, state), earlier.control))
-            if before is not None:
-                factor = _extrapolation_factor(before_gap, earlier_gap, state.gap)
-                extrapolated = Equilibrium(*(e + factor * (e - b) for e, b in (
-                    (earlier.kinematics, before.kinematics), (earlier.control, before.control),
-                    (earlier.forces, before.forces))), earlier.amplitudes)
-                candidates.append((extrapolated.kinematics + self._pressure_shift(extrapolated, state),
-                                   extrapolated.control))
+            factor = _extrapolation_factor(before_gap, earlier_gap, state.gap)
+            extrapolated = Equilibrium(*(e + factor * (e - b) for e, b in (
+                (earlier.kinematics, before.kinematics), (earlier.control, before.control),
+                (earlier.forces, before.forces))), earlier.amplitudes)
+            recalled = [earlier, extrapolated]
+        else:  # the last equilibrium at this load level, however it was reached
+            level = self._solved_at.get(_load_step(None, amplitudes))
+            recalled = [] if level is None else [level[0][0]]
+        candidates += [(e.kinematics + self._pressure_shift(e, state), e.control) for e in recalled]
         best = None
         for g, q in candidates:
             candidate = self._residual(g, q, state, start.kinematics, g_f, f_q)
@@ -374,11 +378,13 @@ class ContactSolver:
 
     def _remember(self, start: Equilibrium, solved: Equilibrium, state: ContactState) -> None:
         """Keep ``solved`` (and the wear gap it was solved against) as the cyclic predictor of
-        its load step, with the one before it at that step (the last 64 steps)."""
-        key = _load_step(start.amplitudes, solved.amplitudes)
-        earlier = self._solved_at.pop(key, ((None, None), None))[0]
-        self._solved_at[key] = ((solved, np.array(state.gap, dtype=float, copy=True)), earlier)
-        if len(self._solved_at) > 64:
+        its load step, with the one before it at that step, and as the last equilibrium at its
+        load level (the last 64 of each)."""
+        gap = np.array(state.gap, dtype=float, copy=True)
+        for key in (_load_step(start.amplitudes, solved.amplitudes), _load_step(None, solved.amplitudes)):
+            earlier = self._solved_at.pop(key, ((None, None), None))[0]
+            self._solved_at[key] = ((solved, gap), earlier)
+        if len(self._solved_at) > 128:
             del self._solved_at[next(iter(self._solved_at))]
 
     def _newton(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
