@@ -379,12 +379,13 @@ class ContactSolver:
     def _remember(self, start: Equilibrium, solved: Equilibrium, state: ContactState) -> None:
         """Keep ``solved`` (and the wear gap it was solved against) as the cyclic predictor of
         its load step, with the one before it at that step, and as the last equilibrium at its
-        load level (the last 64 of each)."""
+        load level: 128 keys in all, the oldest dropped first (a load that never repeats, a
+        tabulated program or cut-back sub-steps, must not grow the memory)."""
         gap = np.array(state.gap, dtype=float, copy=True)
         for key in (_load_step(start.amplitudes, solved.amplitudes), _load_step(None, solved.amplitudes)):
             earlier = self._solved_at.pop(key, ((None, None), None))[0]
             self._solved_at[key] = ((solved, gap), earlier)
-        if len(self._solved_at) > 128:
+        while len(self._solved_at) > 128:
             del self._solved_at[next(iter(self._solved_at))]
 
     def _newton(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from contact.assembly import assemble
-from contact.solver import ContactSolver, Effects, _extrapolation_factor
+from contact.solver import ContactSolver, Effects, Equilibrium, _extrapolation_factor
 from contact.structure import ContactSpace
 from tests.bench.bench_report import flat_on_flat
 
@@ -76,3 +76,18 @@ def test_extrapolation_factor_follows_the_wear_gap():
     assert _extrapolation_factor(0.0, 0.0, 0.0) == 1.0  # no wear: the step between the two
     assert _extrapolation_factor(before, before + step, before - step) == 0.0  # never backwards
 
+
+
+def test_the_predictor_memory_stays_bounded_under_a_load_that_never_repeats(flat):
+    case, space = flat
+    solver = ContactSolver(space, case.law)
+    state = case.initial_state(space.structure.n_points)
+    start = solver.initial_equilibrium()
+    for k in range(1, 400):
+        amplitudes = np.array([1.0, 1e-6 * k])
+        solved = Equilibrium(start.kinematics, start.control, start.forces, amplitudes)
+        solver._remember(start, solved, state)
+        start = solved
+    assert len(solver._solved_at) <= 128
+    # the newest level and step are kept
+    assert any(v[0][0] is start for v in solver._solved_at.values())
