@@ -185,6 +185,7 @@ class Snapshot:
     phase_index: 0 COF phase, 1 wear phase; cycles_in_phase: cycles of it completed.
     history: the last cycles (enough for the loosening window; only the last one keeps its
     per-point fields). locked_elongation: ε_lock of the bolts (mm), or None.
+    predictors: the solver's cyclic predictors (:meth:`contact.solver.ContactSolver.predictor_memory`).
     """
 
     cycle_number: int
@@ -201,6 +202,7 @@ class Snapshot:
     history: list
     jump: float = 1.0
     loosening_at: float | None = None
+    predictors: dict = field(default_factory=dict)
 
 
 class _Run:
@@ -280,6 +282,7 @@ class _Run:
         self.loosening_at = snapshot.loosening_at
         if self.bolts is not None:
             self.lock(snapshot.locked_elongation)
+        self.solver.recall_predictors(snapshot.predictors)
 
     def cycle(self, phase: str, effects: Effects) -> CycleSummary:
         """One load cycle of ``increments_per_cycle`` increments and its summary."""
@@ -372,7 +375,7 @@ class _Run:
                         self.nominal_area, self.initial_clamp,
                         None if self.bolts is None else self.bolts.locked_elongation,
                         self.cof_initial, self.state, self.equilibrium, list(self.history), self.jump,
-                        self.loosening_at)
+                        self.loosening_at, self.solver.predictor_memory())
 
     def result(self, stopped_early: bool) -> RunResult:
         if not self.history:

@@ -159,7 +159,16 @@ class SlidingSolver:
         return self.solver.initial_equilibrium()
 
     def forget_cached_factorisations(self) -> None:
+        """Also forgets the cyclic predictors: a re-pairing starts a new solver without them,
+        and a resumed run re-pairs, so an uninterrupted run must forget them here too."""
         self.solver.forget_cached_factorisations()
+        self.solver.recall_predictors({})
+
+    def predictor_memory(self) -> dict:
+        return {}
+
+    def recall_predictors(self, memory: dict) -> None:
+        self.solver.recall_predictors(memory)
 
     def summary(self) -> dict:
         """How the pairing was handled, for the run summary."""

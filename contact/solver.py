@@ -174,10 +174,56 @@ class ContactSolver:
 
     def forget_cached_factorisations(self) -> None:
         """Drop the factorisations the linear solver keeps across increments (a checkpoint
-        boundary: a resumed run then starts from the same solver state as an uninterrupted one)."""
+        boundary: a resumed run then starts from the same solver state as an uninterrupted one).
+        The cyclic predictors stay: a checkpoint stores them (:meth:`predictor_memory`)."""
         self.linear = self.space.linear_solver(self.linear.settings)
         self._last_compliance = None
+
+    def predictor_memory(self) -> dict[str, np.ndarray]:
+        """The cyclic predictors' memory as arrays, for a checkpoint (:meth:`recall_predictors`).
+
+        Each distinct remembered equilibrium once (``kinematics``, ``control``, ``forces``,
+        ``amplitudes``, ``gap``: stacked), and per key in memory order its ``start`` and ``end``
+        amplitudes (``start`` NaN for a load level) and the indices of its last and earlier
+        equilibria (``before`` −1 for none)."""
+        solved, index = [], {}
+        def number(entry) -> int:
+            if entry[0] is None:
+                return -1
+            if id(entry[0]) not in index:
+                index[id(entry[0])] = len(solved)
+                solved.append(entry)
+            return index[id(entry[0])]
+        n_patterns = len(self.space.structure.patterns)
+        starts, ends, last, before = [], [], [], []
+        for key, (latest, earlier) in self._solved_at.items():
+            amplitudes = np.frombuffer(key, dtype=float)
+            start = amplitudes[:-n_patterns] if amplitudes.size > n_patterns else np.full(n_patterns, np.nan)
+            starts.append(start)
+            ends.append(amplitudes[-n_patterns:])
+            last.append(number(latest))
+            before.append(number(earlier))
+        if not solved:
+            return {}
+        memory = {name: np.stack([getattr(e, name) for e, _ in solved])
+                  for name in ("kinematics", "control", "forces", "amplitudes")}
+        shape = max((np.shape(gap) for _, gap in solved), key=len)  # a scalar 0 before any wear
+        memory.update(gap=np.stack([np.broadcast_to(gap, shape) for _, gap in solved]),
+                      start=np.array(starts).reshape(len(starts), n_patterns),
+                      end=np.array(ends).reshape(len(ends), n_patterns),
+                      last=np.array(last), before=np.array(before))
+        return memory
+
+    def recall_predictors(self, memory: dict[str, np.ndarray]) -> None:
+        """Take up a memory written by :meth:`predictor_memory` (a resumed run)."""
         self._solved_at = {}
+        if not memory:
+            return
+        solved = [(Equilibrium(*(memory[name][k] for name in ("kinematics", "control", "forces", "amplitudes"))),
+                   memory["gap"][k]) for k in range(memory["kinematics"].shape[0])]
+        for start, end, last, before in zip(memory["start"], memory["end"], memory["last"], memory["before"]):
+            key = _load_step(None if np.all(np.isnan(start)) else start, end)
+            self._solved_at[key] = (solved[last], solved[before] if before >= 0 else (None, None))
 
     def initial_equilibrium(self) -> Equilibrium:
         n_patterns = len(self.space.structure.patterns)

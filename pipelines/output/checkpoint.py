@@ -57,6 +57,10 @@ def write_snapshot(group: h5py.Group, snapshot: Snapshot, meter) -> None:
     last = snapshot.history[-1]
     for name in SUMMARY_ARRAYS:
         history.create_dataset(name, data=getattr(last, name))
+    if snapshot.predictors:
+        predictors = group.create_group("predictors")
+        for name, value in snapshot.predictors.items():
+            predictors.create_dataset(name, data=value)
     if meter is not None:
         energy = group.create_group("energy")
         energy.attrs["sums"] = json.dumps({"external_work": meter.external_work,
@@ -86,9 +90,10 @@ def read_snapshot(group: h5py.Group, meter) -> Snapshot:
         for name, value in json.loads(energy.attrs["sums"]).items():
             setattr(meter, name, value)
         meter.recall({name: energy[name][()] for name in energy})
+    predictors = {name: value[()] for name, value in group["predictors"].items()} if "predictors" in group else {}
     return Snapshot(cof_initial=group["cof_initial"][()],
                     locked_elongation=group["locked_elongation"][()] if "locked_elongation" in group else None,
-                    state=state, equilibrium=equilibrium, history=history, **scalars)
+                    state=state, equilibrium=equilibrium, history=history, predictors=predictors, **scalars)
 
 
 __all__ = ["write_snapshot", "read_snapshot"]

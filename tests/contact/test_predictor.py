@@ -31,7 +31,7 @@ def _run(case, space, effects: Effects, forget: bool = False):
     forces, iterations = [], []
     for amplitudes in case.history:
         if forget:
-            solver.forget_cached_factorisations()
+            solver.recall_predictors({})
         equilibrium, state, _, stats = solver.increment(equilibrium, state, amplitudes, effects)
         forces.append(equilibrium.forces)
         iterations.append(stats.iterations)
@@ -91,3 +91,29 @@ def test_the_predictor_memory_stays_bounded_under_a_load_that_never_repeats(flat
     assert len(solver._solved_at) <= 128
     # the newest level and step are kept
     assert any(v[0][0] is start for v in solver._solved_at.values())
+
+
+def test_the_predictor_memory_survives_a_checkpoint_bit_for_bit(flat):
+    """A solver that takes up another's memory (a resumed run) solves the next cycle to the
+    same bits as the one that kept it."""
+    case, space = flat
+    effects = Effects(cof_evolution=True)
+    kept = ContactSolver(space, case.law)
+    equilibrium, state = kept.initial_equilibrium(), case.initial_state(space.structure.n_points)
+    split = len(case.history) - 4  # before the last cycle
+    for amplitudes in case.history[:split]:
+        equilibrium, state, _, _ = kept.increment(equilibrium, state, amplitudes, effects)
+    memory = kept.predictor_memory()
+    assert memory["last"].size == len(kept._solved_at) and np.all(memory["before"] < memory["kinematics"].shape[0])
+    resumed = ContactSolver(space, case.law)
+    resumed.recall_predictors({name: value.copy() for name, value in memory.items()})
+    assert list(resumed._solved_at) == list(kept._solved_at)
+    kept.forget_cached_factorisations()  # as at a checkpoint
+    ends = []
+    for solver in (kept, resumed):
+        e, s = equilibrium, state
+        for amplitudes in case.history[split:]:
+            e, s, _, stats = solver.increment(e, s, amplitudes, effects)
+            assert stats.iterations == 1  # the predictors were there
+        ends.append(e.forces)
+    assert np.array_equal(*ends)
