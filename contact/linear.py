@@ -37,6 +37,18 @@ from scipy.linalg.lapack import get_lapack_funcs
 from contact.law import Response
 from contact.structure import ContactSpace
 
+#: how many times faster per flop the preconditioner's rebuild runs than a Krylov iteration:
+#: an iteration streams the dense Jacobian and the factor from memory for 2 flops per entry
+#: (memory-bound), the LU is BLAS-3 (compute-bound). A rebuild's work in iteration flops is
+#: its flops over this. Measured on the counterweight at 5 mm (1,260 rows, one thread, 150
+#: COF and 260 wear cycles): 1.1 ms per iteration and 28 ms per rebuild, a ratio of 25 where
+#: the flop counts give 210, so 8. At 1 (the flops alone) aged preconditioners were kept too
+#: long: 133,577 Krylov iterations (583 of 11,071 solves failing at max_iterations) and 804
+#: rebuilds; at 8, 65,172 iterations (27 failing) and 1,052 rebuilds, 100 instead of 118 s
+#: in the two; at 4, 80,234 and 772; at 16, 57,899 and 1,587. A constant, not a timing, so
+#: that the results do not depend on the machine.
+FACTOR_FLOP_RATE = 8.0
+
 
 def tangent_blocks(response: Response, area: np.ndarray) -> np.ndarray:
     """A·∂[p, τ]/∂[h, Δs] per point, (n, dim, dim) in N/mm (forces per mm of kinematics)."""
@@ -56,8 +68,9 @@ class KrylovSettings:
         iteration beyond it is work lost to an aged one; once that lost work exceeds what the
         last rebuild cost, the preconditioner is rebuilt for the next solve (pay for a
         rebuild only after having wasted as much: never worse than twice the best policy).
-        Both are counted in flops, not seconds, so that the policy, and the last digits of
-        the results, do not depend on the machine's load.
+        Both are counted in flops, not seconds (a rebuild's flops count
+        1/:data:`FACTOR_FLOP_RATE` each), so that the policy, and the last digits of the
+        results, do not depend on the machine's load.
     max_iterations: Krylov space size; if GMRES has not converged by then, the
         preconditioner is rebuilt from the current tangent and the solve repeated.
     single_precision: factorise the preconditioner and multiply by W in float32 inside
@@ -246,7 +259,7 @@ class NewtonLinearSolver:
         if info > 0:
             raise np.linalg.LinAlgError("singular preconditioner")
         factor = _Factor(lu, pivots, closed_points, closed_blocks.copy(), self._control_scale,
-                         _rebuild_flops(matrix.shape[0]))
+                         _rebuild_flops(matrix.shape[0]) / FACTOR_FLOP_RATE)
         self._pool.add(factor, self.space.structure.n_points)
         self._stale = False
         self.counters.factorisations += 1
@@ -257,7 +270,8 @@ class NewtonLinearSolver:
 class _Factor:
     """One preconditioner: the LU (single or double precision) of the bordered closed
     Jacobian of an earlier tangent, the closed points it covers and their tangent blocks
-    then (N/mm), the control rows' scale it was formed with, and its cost and waste in flops."""
+    then (N/mm), the control rows' scale it was formed with, and its cost and waste in
+    Krylov-iteration flops."""
 
     lu: np.ndarray
     pivots: np.ndarray
