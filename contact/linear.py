@@ -16,7 +16,7 @@ iterations and increments: between them the closed set rarely changes and the ta
 changes little, so a few Krylov iterations (each one product with W and one triangular
 solve) replace an O(n³) factorisation. The factor is rebuilt when points close that it does
 not cover, or when the Krylov work lost to its age exceeds what the last rebuild cost. Up to
-16 factors are kept (while they fit in 256 MB) and each solve takes the one formed at the
+16 factors are kept (as many as fit in 768 MB) and each solve takes the one formed at the
 tangent nearest its own: under a cyclic load that is the one of the same point of an
 earlier cycle, not the previous increment's. Work
 is counted in floating-point operations, not measured in seconds: a policy driven by the
@@ -76,12 +76,15 @@ class KrylovSettings:
     single_precision: factorise the preconditioner and multiply by W in float32 inside
         GMRES (half the memory traffic; 1e-7 relative error, far below the Krylov tolerance);
         the Krylov vectors and the solver's residuals stay float64.
-    factors_kept: preconditioners kept (the most recently used), if that many fit in
-        ``factors_bytes``; else one. Each solve takes the one formed at the tangent nearest
+    factors_kept: preconditioners kept at most (the most recently used), and only as many as
+        fit in ``factors_bytes`` (at least one). Each solve takes the one formed at the tangent nearest
         the current one. Under a cyclic load the tangent at one point of the cycle is much
         nearer the tangent at the same point one cycle earlier than the previous increment's
         (the slip zones move with the load, and reverse): the counterweight at 5 mm needed
         38 % fewer Krylov iterations and 60 % fewer factorisations with 16 than with one.
+        With one kept, a rebuilt preconditioner replaces the only one and ages as fast as it:
+        at 2.5 mm (4,800 rows, 92 MB a factor), over 20 COF and 10 wear cycles, 8 kept took
+        8,157 Krylov iterations and 42 rebuilds, one 11,595 and 83.
     """
 
     direct_below: int = 300
@@ -91,7 +94,7 @@ class KrylovSettings:
     max_iterations: int = 40
     single_precision: bool = True
     factors_kept: int = 16
-    factors_bytes: float = 256e6
+    factors_bytes: float = 768e6
 
 
 @dataclass
@@ -117,8 +120,8 @@ class NewtonLinearSolver:
         self._stale = True
         self._last_points: np.ndarray | None = None  # the points the last solve worked on
         itemsize = 4 if settings.single_precision else 8
-        fits = settings.factors_kept * itemsize * (space.n_rows + space.n_control) ** 2 <= settings.factors_bytes
-        self._pool.size = max(1, settings.factors_kept) if fits else 1
+        fitting = int(settings.factors_bytes // (itemsize * (space.n_rows + space.n_control) ** 2))
+        self._pool.size = max(1, min(settings.factors_kept, fitting))
 
     def description(self) -> str:
         """Which path solves this interface's Newton systems, in words (for run summaries)."""

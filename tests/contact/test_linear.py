@@ -131,3 +131,15 @@ def test_pool_chooses_the_preconditioner_of_the_nearest_tangent_that_covers_the_
     third = _Factor(np.eye(2), np.arange(2), np.arange(n), tangents[2].copy(), np.ones(0), 1.0)
     pool.add(third, n)
     assert third in pool.factors and twins[0] not in pool.factors
+
+
+def test_pool_keeps_as_many_preconditioners_as_fit_in_its_memory(flat):
+    """factors_bytes bounds the preconditioners' memory: as many as fit are kept (at most
+    factors_kept, at least one), each a (rows + controls)² array of 4 (single) or 8 bytes."""
+    _, space = flat
+    size = space.n_rows + space.n_control
+    for precision, itemsize in ((True, 4), (False, 8)):
+        for room, expected in ((0.5, 1), (1, 1), (3.5, 3), (100, 16)):
+            settings = KrylovSettings(single_precision=precision, factors_kept=16,
+                                      factors_bytes=room * itemsize * size**2)
+            assert NewtonLinearSolver(space, settings)._pool.size == expected
