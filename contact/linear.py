@@ -44,9 +44,9 @@ from contact.structure import ContactSpace
 #: COF and 260 wear cycles): 1.1 ms per iteration and 28 ms per rebuild, a ratio of 25 where
 #: the flop counts give 210, so 8. At 1 (the flops alone) aged preconditioners were kept too
 #: long: 133,577 Krylov iterations (583 of 11,071 solves failing at max_iterations) and 804
-#: rebuilds; at 8, 65,172 iterations (27 failing) and 1,052 rebuilds, 100 instead of 118 s
-#: in the two; at 4, 80,234 and 772; at 16, 57,899 and 1,587. A constant, not a timing, so
-#: that the results do not depend on the machine.
+#: rebuilds; at 8, 65,172 iterations (27 failing) and 1,052 rebuilds: 106 instead of 156 s
+#: in the two, run side by side; at 4, 80,234 and 772; at 16, 57,899 and 1,587. A constant,
+#: not a timing, so that the results do not depend on the machine.
 FACTOR_FLOP_RATE = 8.0
 
 
