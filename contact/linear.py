@@ -35,7 +35,7 @@ import scipy.linalg as la
 from scipy.linalg.lapack import get_lapack_funcs
 
 from contact.law import Response
-from contact.structure import ContactSpace
+from contact.structure import ContactSpace, symmetric_product
 
 #: how many times faster per flop the preconditioner's rebuild runs than a Krylov iteration:
 #: an iteration streams the dense Jacobian and the factor from memory for 2 flops per entry
@@ -170,7 +170,7 @@ class NewtonLinearSolver:
             x_c, x_q = x[:n_c], x[n_c:]
             tangent_x = _apply_blocks(closed_blocks, x_c)
             top = buffer[:n_c]
-            np.add(x_c, W_cc @ tangent_x.astype(dtype, copy=False), out=top)
+            np.add(x_c, symmetric_product(W_cc, tangent_x), out=top)
             if x_q.size:
                 top += E_c @ x_q
                 buffer[n_c:] = self._control_scale * (space.Sq @ x_q - E_c.T @ tangent_x)

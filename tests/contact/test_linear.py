@@ -13,7 +13,7 @@ from contact.assembly import assemble
 from contact.law import evaluate
 from contact.linear import KrylovSettings, NewtonLinearSolver, tangent_blocks
 from contact.solver import ContactSolver, NewtonSettings
-from contact.structure import ContactSpace
+from contact.structure import SYMMETRIC_PRODUCT_BYTES, ContactSpace, symmetric_product
 from tests.bench.bench_report import flat_on_flat
 
 
@@ -143,3 +143,21 @@ def test_pool_keeps_as_many_preconditioners_as_fit_in_its_memory(flat):
             settings = KrylovSettings(single_precision=precision, factors_kept=16,
                                       factors_bytes=room * itemsize * size**2)
             assert NewtonLinearSolver(space, settings)._pool.size == expected
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("rows", [40, 700])
+def test_symmetric_product_reads_one_triangle_and_equals_the_general_product(dtype, rows):
+    """W·λ of a symmetric W equals the general product to the product's own error bound
+    (rows·eps of |W|·|λ|); from SYMMETRIC_PRODUCT_BYTES up only W's upper triangle is read,
+    so a matrix whose lower triangle is garbage gives the product of the symmetric one."""
+    rng = np.random.default_rng(3)
+    upper = rng.standard_normal((rows, rows))
+    symmetric = np.triu(upper) + np.triu(upper, 1).T
+    matrix, vector = symmetric.astype(dtype), rng.standard_normal(rows)
+    bound = rows * np.finfo(dtype).eps * (np.abs(symmetric) @ np.abs(vector))
+    expected = symmetric @ vector
+    assert np.all(np.abs(symmetric_product(matrix, vector) - expected) <= bound)
+    if matrix.nbytes >= SYMMETRIC_PRODUCT_BYTES:
+        garbage = matrix + np.tril(np.full_like(matrix, 1e3), -1)
+        assert np.all(np.abs(symmetric_product(garbage, vector) - expected) <= bound)
