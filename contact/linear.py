@@ -65,12 +65,8 @@ class KrylovSettings:
         there the inexact correction sets where Newton stops inside its tolerance, and a
         tight one lands it where the exact LU does (within 1e-9 instead of 1e-8 relative).
     fresh_iterations: Krylov iterations a solve needs with a fresh preconditioner. Every
-        iteration beyond it is work lost to an aged one; once that lost work exceeds what the
-        last rebuild cost, the preconditioner is rebuilt for the next solve (pay for a
-        rebuild only after having wasted as much: never worse than twice the best policy).
-        Both are counted in flops, not seconds (a rebuild's flops count
-        1/:data:`FACTOR_FLOP_RATE` each), so that the policy, and the last digits of the
-        results, do not depend on the machine's load.
+        iteration beyond it is work lost to an aged one, and the preconditioner is rebuilt
+        once that has cost as much as a rebuild (:class:`Ageing`, counted in flops).
     max_iterations: Krylov space size; if GMRES has not converged by then, the
         preconditioner is rebuilt from the current tangent and the solve repeated.
     single_precision: factorise the preconditioner and multiply by W in float32 inside
@@ -95,6 +91,32 @@ class KrylovSettings:
     single_precision: bool = True
     factors_kept: int = 16
     factors_bytes: float = 768e6
+
+
+@dataclass
+class Ageing:
+    """When a kept preconditioner is worth rebuilding: the one rule of the dense and the
+    sparse Krylov paths.
+
+    Every Krylov iteration a solve needs beyond a fresh preconditioner's is work lost to its
+    age; once the lost work exceeds what its rebuild cost, it is rebuilt (pay for a rebuild
+    only after having wasted as much: never worse than twice the best policy).
+    iteration_work: flops of one Krylov iteration; rebuild_work: the rebuild's flops over
+    how many times faster per flop it runs (a path's ``FACTOR_FLOP_RATE``: the rebuild is
+    compute-bound, an iteration memory-bound). Counted in flops, not seconds, so that the
+    policy, and the last digits of the results, do not depend on the machine's load."""
+
+    iteration_work: float
+    rebuild_work: float
+    lost_work: float = 0.0
+
+    def charge(self, iterations: int, fresh_iterations: int) -> bool:
+        """Charge one solve's iterations; True once a rebuild pays (the count starts again)."""
+        self.lost_work += max(iterations - fresh_iterations, 0) * self.iteration_work
+        due = self.lost_work > self.rebuild_work
+        if due:
+            self.lost_work = 0.0
+        return due
 
 
 @dataclass
@@ -184,9 +206,10 @@ class NewtonLinearSolver:
         if refactor:
             chosen = self._refactor(working, closed_blocks, W_cc, E_c)
         solution, iterations = krylov(chosen)
-        if solution is not None and iterations > self.settings.fresh_iterations:
-            aged = iterations - self.settings.fresh_iterations
-            chosen.lost_work += aged * _krylov_iteration_flops(n_c + space.n_control)
+        # Rebuild for the next solve once the nearest preconditioner has wasted as much as it
+        # cost. The old one stays in the pool (least recently used goes first) for the
+        # tangents it is nearer to; here the new one will be nearer.
+        self._stale = solution is not None and chosen.age.charge(iterations, self.settings.fresh_iterations)
         if solution is None:
             self._pool.drop(chosen)
             chosen = self._refactor(working, closed_blocks, W_cc, E_c)
@@ -194,12 +217,6 @@ class NewtonLinearSolver:
             iterations += more
             if solution is None:
                 raise np.linalg.LinAlgError("GMRES did not converge with a fresh preconditioner")
-        # Pay for a rebuild once the nearest preconditioner has wasted as much as it cost. The
-        # old one stays in the pool (least recently used goes first) for the tangents it is
-        # nearer to; here the new one will be nearer.
-        self._stale = chosen.lost_work > chosen.rebuild_work
-        if self._stale:
-            chosen.lost_work = 0.0
         self.counters.solves += 1
         self.counters.krylov_iterations += iterations
         return self._with_open_rows(blocks, working, solution[:n_c], solution[n_c:], r_kin)
@@ -261,8 +278,9 @@ class NewtonLinearSolver:
         lu, pivots, info = _getrf(matrix)
         if info > 0:
             raise np.linalg.LinAlgError("singular preconditioner")
+        size = matrix.shape[0]
         factor = _Factor(lu, pivots, closed_points, closed_blocks.copy(), self._control_scale,
-                         _rebuild_flops(matrix.shape[0]) / FACTOR_FLOP_RATE)
+                         Ageing(_krylov_iteration_flops(size), _rebuild_flops(size) / FACTOR_FLOP_RATE))
         self._pool.add(factor, self.space.structure.n_points)
         self._stale = False
         self.counters.factorisations += 1
@@ -273,16 +291,14 @@ class NewtonLinearSolver:
 class _Factor:
     """One preconditioner: the LU (single or double precision) of the bordered closed
     Jacobian of an earlier tangent, the closed points it covers and their tangent blocks
-    then (N/mm), the control rows' scale it was formed with, and its cost and waste in
-    Krylov-iteration flops."""
+    then (N/mm), the control rows' scale it was formed with, and its age (cost and waste)."""
 
     lu: np.ndarray
     pivots: np.ndarray
     points: np.ndarray
     blocks: np.ndarray
     control_scale: np.ndarray
-    rebuild_work: float
-    lost_work: float = 0.0
+    age: "Ageing"
     last_used: int = 0
 
     def precondition(self, vector: np.ndarray) -> np.ndarray:

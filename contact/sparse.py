@@ -43,7 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from contact.full_model import TangentAssembler
-from contact.linear import KrylovCounters, KrylovSettings, _gmres
+from contact.linear import Ageing, KrylovCounters, KrylovSettings, _gmres
 from contact.structure import ContactSpace, Structure
 from reduction import pardiso
 from reduction.errors import InputError
@@ -239,8 +239,7 @@ class SparseNewtonSolver:
         self.reference = reference
         self._factor = None
         self._stale = True
-        self._lost_work = 0.0
-        self._rebuild_work = 0.0
+        self._age: Ageing | None = None
 
     def description(self) -> str:
         """Which path solves this interface's Newton systems, in words (for run summaries)."""
@@ -272,8 +271,7 @@ class SparseNewtonSolver:
             iterations += more
             if solution is None:
                 raise np.linalg.LinAlgError("GMRES did not converge with a fresh preconditioner")
-        self._lost_work += max(iterations - self.settings.fresh_iterations, 0) * self._solve_work
-        self._stale = self._lost_work > self._rebuild_work
+        self._stale = self._age.charge(iterations, self.settings.fresh_iterations)
         self.counters.solves += 1
         self.counters.krylov_iterations += iterations
         n_a = space.contact_dofs.size
@@ -300,9 +298,7 @@ class SparseNewtonSolver:
             if self._factor is None:
                 self._factor = _SparseLU(matrix, self.settings.single_precision)
             self._factor.factorise(matrix)
-        self._solve_work = self._factor.solve_flops
-        self._rebuild_work = self._factor.factor_flops / FACTOR_FLOP_RATE
-        self._lost_work = 0.0
+        self._age = Ageing(self._factor.solve_flops, self._factor.factor_flops / FACTOR_FLOP_RATE)
         self._stale = False
         self.counters.factorisations += 1
 
