@@ -170,10 +170,11 @@ def _symmetric(matrix: np.ndarray) -> np.ndarray:
 
 
 #: a symmetric matrix from this size (bytes) up is multiplied reading one triangle: half the
-#: memory traffic once it no longer fits in cache. Measured (one thread, C-ordered, best of
-#: five): 4,776 rows 15.4 -> 8.1 ms in double and 6.1 -> 3.9 ms in single precision, 1,260
-#: rows in double 0.23 -> 0.14 ms; below about 1 MB BLAS's general product is as fast.
-SYMMETRIC_PRODUCT_BYTES = 1 << 20
+#: memory traffic once it no longer stays in cache. Measured (one thread, best of five):
+#: 4,776 rows 15.4 -> 8.1 ms in double and 6.1 -> 3.9 ms in single precision; 1,236 rows in
+#: double (12 MB) 0.23 -> 0.14 ms alone, 0.58 -> 0.53 ms inside the counterweight run at 5 mm;
+#: in single (6 MB) no gain (0.11-0.13 ms either way).
+SYMMETRIC_PRODUCT_BYTES = 8 << 20
 
 
 def symmetric_product(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
@@ -186,9 +187,14 @@ def symmetric_product(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
             or matrix.dtype not in (np.float32, np.float64)):
         return matrix @ vector
     symv = blas.dsymv if matrix.dtype == np.float64 else blas.ssymv
-    # matrix.T is the Fortran-ordered view BLAS reads without a copy; its lower triangle
-    # is the upper one of ``matrix``
-    return symv(1.0, np.ascontiguousarray(matrix).T, vector, lower=1)
+    # BLAS reads a Fortran-ordered matrix without a copy: a C-ordered one through its
+    # transpose, whose lower triangle is its upper one (W[rows][:, rows] comes out in
+    # Fortran order; copying it would cost ten products)
+    if matrix.flags.f_contiguous:
+        return symv(1.0, matrix, vector, lower=0)
+    if matrix.flags.c_contiguous:
+        return symv(1.0, matrix.T, vector, lower=1)
+    return matrix @ vector
 
 
 def dense_block(matrix, rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
