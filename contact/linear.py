@@ -298,7 +298,7 @@ class _Factor:
     points: np.ndarray
     blocks: np.ndarray
     control_scale: np.ndarray
-    age: "Ageing"
+    age: Ageing
     last_used: int = 0
 
     def precondition(self, vector: np.ndarray) -> np.ndarray:

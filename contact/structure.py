@@ -171,9 +171,9 @@ def _symmetric(matrix: np.ndarray) -> np.ndarray:
 
 #: a symmetric matrix from this size (bytes) up is multiplied reading one triangle: half the
 #: memory traffic once it no longer stays in cache. Measured (one thread, best of five):
-#: 4,776 rows 15.4 -> 8.1 ms in double and 6.1 -> 3.9 ms in single precision; 1,236 rows in
-#: double (12 MB) 0.23 -> 0.14 ms alone, 0.58 -> 0.53 ms inside the counterweight run at 5 mm;
-#: in single (6 MB) no gain (0.11-0.13 ms either way).
+#: 4,776 rows 15.4 -> 8.1 ms in double and 6.1 -> 3.9 ms in single precision; 1,260 rows in
+#: double (12 MB) 0.23 -> 0.14 ms alone (1,236 rows inside the counterweight run at 5 mm:
+#: 0.58 -> 0.53 ms); in single at 1,200-1,260 rows (6 MB) no gain (0.09-0.13 ms either way).
 SYMMETRIC_PRODUCT_BYTES = 8 << 20
 
 
