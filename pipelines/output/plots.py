@@ -36,6 +36,14 @@ FIELD_LABELS = {
     "ffdp": "fretting fatigue parameter FFDP = σ_t·τ·δ [MPa²·mm]",
 }
 
+AREA_LABELS = {
+    "stick_area_fraction": "stick",
+    "slip_area_fraction": "slip",
+    "damaged_area_fraction": "slip at μ_max (damaged)",
+    "worn_area_fraction": "worn",
+    "cof_evolved_area_fraction": "COF evolved",
+}
+
 
 def _field(group, name):
     value = group[name][()]
@@ -164,27 +172,30 @@ def _surface_maps(file, coordinates, names, title, out_dir) -> list[Path]:
 
 
 def _cycles_plot(cycles, title, out_dir) -> Path:
-    """Area fractions (and the clamp force) over the simulated cycles, the wear phase marked."""
+    """Area fractions (and the clamp force) over the real load cycles, the wear phase marked.
+
+    The axis is the equivalent real cycles on a log scale: the COF phase counts one real
+    cycle per simulated one, each wear block stands for as many as its (adaptive) jump, so
+    150 COF cycles and millions of wear cycles share one readable axis, as on an S-N plot.
+    """
     figures = cycles["figures"]
-    # Simulated cycles on the axis: with cycle jumping the COF phase would otherwise be
-    # squeezed against zero by the wear phase's equivalent cycles.
-    n = cycles["cycle"][()]
     phase = cycles["phase"][()]
     equivalent = cycles["equivalent_cycles"][()]
     clamp = figures.get("clamp_force_N")
     has_clamp = clamp is not None and np.any(np.isfinite(clamp[()]))
-    fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(7, 5 if has_clamp else 3), sharex=True)
+    fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(7, 5.2 if has_clamp else 3.2), sharex=True)
     axes = np.atleast_1d(axes)
     for key in ("stick_area_fraction", "slip_area_fraction", "damaged_area_fraction",
                 "worn_area_fraction", "cof_evolved_area_fraction"):
         if key in figures:
-            axes[0].plot(n, figures[key][()], label=key.replace("_area_fraction", ""))
-    axes[0].set_ylabel("area / nominal area")
-    axes[0].legend(fontsize=7)
+            axes[0].plot(equivalent, figures[key][()], label=AREA_LABELS[key])
+    axes[0].set_ylabel("area / nominal area [-]")
+    axes[0].set_ylim(-0.03, 1.03)
+    axes[0].legend(fontsize=7, loc="center left")
     axes[0].grid(alpha=0.3)
     if has_clamp:
         force = clamp[()] / 1000.0
-        axes[1].plot(n, force, color="k")
+        axes[1].plot(equivalent, force, color="k")
         axes[1].set_ylabel("clamp (bolt) force [kN]")
         # plain numbers, no "1e-5+8.98515e2" offset; a steady force gets a ±0.5 % window
         axes[1].yaxis.set_major_formatter(ScalarFormatter(useOffset=False))
@@ -192,16 +203,17 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
         if spread < 1e-2 * abs(middle):
             axes[1].set_ylim(middle - 5e-3 * abs(middle), middle + 5e-3 * abs(middle))
         axes[1].grid(alpha=0.3)
+    axes[-1].set_xscale("log")
     wear = np.flatnonzero(phase == 2)
-    label = "simulated load cycle"
+    label = "equivalent real load cycles [-]"
     if wear.size:
-        start = n[wear[0]] - 0.5
+        start = equivalent[wear[0] - 1] if wear[0] else 1.0
         for ax in axes:
             ax.axvline(start, color="grey", ls="--", lw=0.8)
         axes[0].text(start, 1.0, " wear phase", transform=axes[0].get_xaxis_transform(),
-                     va="top", fontsize=7, color="grey")
-        jump = (equivalent[wear[-1]] - (equivalent[wear[0] - 1] if wear[0] else 0.0)) / wear.size
-        label += f" (wear phase: each stands for {jump:g} real cycles; {equivalent[-1]:g} in all)"
+                     va="bottom", fontsize=7, color="grey")
+        label += (f"; wear phase after {start:,.0f}: {wear.size} blocks "
+                  f"to {equivalent[-1]:.3g} cycles")
     axes[-1].set_xlabel(label)
     fig.suptitle(f"{title}: contact condition over cycles")
     return _save(fig, out_dir / "cycles.png")
