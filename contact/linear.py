@@ -168,24 +168,50 @@ class NewtonLinearSolver:
         # are the identity and the equations stay exact. Solving on the points the
         # preconditioner was built for keeps it usable when points open.
         chosen = None if self._stale else self._pool.nearest(blocks, closed_points)
-        refactor = chosen is None
-        if refactor:
-            reference = self._last_points
-            grown = closed_points if reference is None else np.union1d(reference, closed_points)
-            # Keep the old points only while that costs little: a contact zone that moves
-            # away should not drag all its history along.
-            working = grown if grown.size <= 1.25 * closed_points.size else closed_points
+        if chosen is None:
+            working = self._points_to_cover(closed_points)
         else:
             working = chosen.points
             self._control_scale = chosen.control_scale
         self._last_points = working
         closed = _rows(working, dim)
-        space = self.space
         closed_blocks = blocks[working]
         dtype = np.float32 if self.settings.single_precision else np.float64
         W_cc = self._closed_compliance(closed, dtype)
-        E_c = space.E[closed]
+        E_c = self.space.E[closed]
+        matvec = self._bordered_product(closed_blocks, W_cc, E_c)
+        tolerance = self.settings.final_tolerance if final else self.settings.relative_tolerance
+        if chosen is None:
+            chosen = self._refactor(working, closed_blocks, W_cc, E_c)
+        solution, iterations = self._krylov(matvec, chosen, r_kin[closed], r_ctl, tolerance)
+        # Rebuild for the next solve once the nearest preconditioner has wasted as much as it
+        # cost. The old one stays in the pool (least recently used goes first) for the
+        # tangents it is nearer to; here the new one will be nearer.
+        self._stale = solution is not None and chosen.age.charge(iterations, self.settings.fresh_iterations)
+        if solution is None:
+            self._pool.drop(chosen)
+            chosen = self._refactor(working, closed_blocks, W_cc, E_c)
+            solution, more = self._krylov(matvec, chosen, r_kin[closed], r_ctl, tolerance)
+            iterations += more
+            if solution is None:
+                raise np.linalg.LinAlgError("GMRES did not converge with a fresh preconditioner")
+        self.counters.solves += 1
+        self.counters.krylov_iterations += iterations
         n_c = closed.size
+        return self._with_open_rows(blocks, working, solution[:n_c], solution[n_c:], r_kin)
+
+    def _points_to_cover(self, closed_points: np.ndarray) -> np.ndarray:
+        """The points a new preconditioner is built on: the closed ones, and those the last
+        solve worked on while that costs little (a contact zone that moves away should not
+        drag all its history along)."""
+        reference = self._last_points
+        grown = closed_points if reference is None else np.union1d(reference, closed_points)
+        return grown if grown.size <= 1.25 * closed_points.size else closed_points
+
+    def _bordered_product(self, closed_blocks, W_cc, E_c):
+        """x ↦ J·x for the bordered closed Jacobian (see :func:`_bordered`), with the control
+        rows scaled as the preconditioner in use was (read at each call: a rebuild sets it)."""
+        space, n_c = self.space, W_cc.shape[0]
         buffer = np.empty(n_c + space.n_control)
 
         def matvec(x):
@@ -198,28 +224,13 @@ class NewtonLinearSolver:
                 buffer[n_c:] = self._control_scale * (space.Sq @ x_q - E_c.T @ tangent_x)
             return buffer.copy()
 
-        def krylov(factor):
-            rhs = np.concatenate([-r_kin[closed], -self._control_scale * r_ctl])
-            tolerance = self.settings.final_tolerance if final else self.settings.relative_tolerance
-            return _gmres(matvec, factor.precondition, rhs, tolerance, self.settings.max_iterations)
+        return matvec
 
-        if refactor:
-            chosen = self._refactor(working, closed_blocks, W_cc, E_c)
-        solution, iterations = krylov(chosen)
-        # Rebuild for the next solve once the nearest preconditioner has wasted as much as it
-        # cost. The old one stays in the pool (least recently used goes first) for the
-        # tangents it is nearer to; here the new one will be nearer.
-        self._stale = solution is not None and chosen.age.charge(iterations, self.settings.fresh_iterations)
-        if solution is None:
-            self._pool.drop(chosen)
-            chosen = self._refactor(working, closed_blocks, W_cc, E_c)
-            solution, more = krylov(chosen)
-            iterations += more
-            if solution is None:
-                raise np.linalg.LinAlgError("GMRES did not converge with a fresh preconditioner")
-        self.counters.solves += 1
-        self.counters.krylov_iterations += iterations
-        return self._with_open_rows(blocks, working, solution[:n_c], solution[n_c:], r_kin)
+    def _krylov(self, matvec, factor, r_closed, r_ctl, tolerance):
+        """GMRES on the bordered closed system preconditioned by ``factor``: (solution or None,
+        iterations)."""
+        rhs = np.concatenate([-r_closed, -self._control_scale * r_ctl])
+        return _gmres(matvec, factor.precondition, rhs, tolerance, self.settings.max_iterations)
 
     def _with_open_rows(self, blocks, closed_points, delta_closed, delta_q, r_kin):
         """The full Δg from its closed rows: open rows follow by one product with W."""
