@@ -2,9 +2,9 @@
 its peak memory is its own).
 
 ``python tests/bench/scene_run.py SCENE [--size H] [--cycles N] [--linear auto|dense]
-[--fields OUT.npz] [--plots]`` runs ``examples/SCENE.toml`` (with ``contact_size = H`` mm on
-every body that has one; the shipped procedure unless ``--cycles`` keeps only that many COF
-cycles) and prints one JSON line: verdict, points, set-up and procedure times, increments,
+[--solver auto|dense|sparse] [--fields OUT.npz] [--plots]`` runs ``examples/SCENE.toml`` (with
+``contact_size = H`` mm on every body that has one; the shipped procedure unless ``--cycles``
+keeps only that many COF cycles; ``--solver`` sets ``[contact] solver``, the contact path) and prints one JSON line: verdict, points, set-up and procedure times, increments,
 CPU time per increment of the procedure (energy bookkeeping and results writing included),
 peak resident memory (MB) and the load average.
 
@@ -46,9 +46,10 @@ from reduction.threads import pin_process  # noqa: E402
 LINEAR = {"auto": KrylovSettings(), "dense": KrylovSettings(direct_below=np.inf)}
 
 
-def overrides(path: Path, size: float | None, cycles: int | None) -> dict:
-    """Scene overrides: the contact mesh size of every body that has one, and the cycles."""
-    out = {}
+def overrides(path: Path, size: float | None, cycles: int | None, solver: str = "auto") -> dict:
+    """Scene overrides: the contact mesh size of every body that has one, the cycles and the
+    contact path."""
+    out = {} if solver == "auto" else {"contact.solver": solver}
     if size is not None:
         bodies = scenes.load(path).data["bodies"]
         out.update({f"bodies.{name}.mesh.contact_size": size for name, body in bodies.items()
@@ -66,11 +67,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cycles", type=int, default=None, help="COF cycles only, no wear phase")
     parser.add_argument("--linear", choices=LINEAR, default="auto",
                         help="auto: the shipped choice; dense: exact LU of the dense system every iteration")
+    parser.add_argument("--solver", choices=("auto", "dense", "sparse"), default="auto",
+                        help="the contact path ([contact] solver): auto is the shipped choice")
     parser.add_argument("--fields", type=Path, default=None, help="write the final fields here (.npz)")
     args = parser.parse_args(argv)
     pin_process()  # as the command line does
     path = ROOT / "examples" / f"{args.scene}.toml"
-    scene = scenes.load(path, overrides(path, args.size, args.cycles))
+    scene = scenes.load(path, overrides(path, args.size, args.cycles, args.solver))
     start_cpu, start = time.process_time(), time.perf_counter()
     multibody = multibody_loading(scene, None) if "coupling" in scene.data else None
     model = build(scene, multibody=multibody)
@@ -88,7 +91,8 @@ def main(argv: list[str] | None = None) -> int:
     run_up = 2 if "coupling" in scene.data else 1  # a coupled scene ramps its mean loads in too
     increments = run_up * proc.preload_increments + summary["cycles_run"] * proc.increments_per_cycle
     print(json.dumps({
-        "scene": args.scene, "size": args.size, "linear": args.linear, "verdict": summary["verdict"],
+        "scene": args.scene, "size": args.size, "linear": args.linear, "path": model.contact_path,
+        "verdict": summary["verdict"],
         "points": model.assembly.structure.n_points, "retained_dofs": model.assembly.structure.n_dofs,
         "increments": increments, "cycles_run": summary["cycles_run"],
         "wall_s": wall, "cpu_s": cpu, "setup_s": setup, "setup_cpu_s": setup_cpu,
