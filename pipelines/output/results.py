@@ -209,12 +209,24 @@ class ResultsWriter(Observer):
             group = self.file[group_name]
             for name, values in rows.items():
                 _append_rows(group, name, np.array(values), self._units[f"{group_name}/{name}"])
-        if "bolt_forces" in self.file["increments"]:
-            self.file["increments/bolt_forces"].attrs["bolts"] = ",".join(self.model.assembly.structure.bolts.names)
+        self._label_columns()
         self._rows = {"increments": {}, "cycles": {}}
         self._flush_increment_fields()
         self.file.flush()
         self._flushed_at = time.monotonic()
+
+    def _label_columns(self) -> None:
+        """Name the columns of the per-increment tables (bolts, control DOFs and their units) as
+        soon as they exist, so that a run's partial file (and its checkpoint) reads like a
+        finished one."""
+        increments = self.file["increments"]
+        if "bolt_forces" in increments:
+            increments["bolt_forces"].attrs["bolts"] = ",".join(self.model.assembly.structure.bolts.names)
+        if "control/displacement" in increments:
+            increments["control"].attrs["dofs"] = ",".join(self.labels)
+            rotation = [label.rsplit(".", 1)[-1].startswith("r") for label in self.labels]  # rx, ry, rz
+            for name, units in (("displacement", ("mm", "rad")), ("force", ("N", "N*mm"))):
+                increments[f"control/{name}"].attrs["units"] = ",".join(units[r] for r in rotation)
 
     def increment(self, record: IncrementRecord) -> None:
         interrupts.check()
@@ -307,11 +319,6 @@ class ResultsWriter(Observer):
     def finish(self, result) -> Path:
         """Write the final fields and the summary, close, and move the file into place."""
         self._flush()
-        if "control/displacement" in self.file["increments"]:
-            self.file["increments/control"].attrs["dofs"] = ",".join(self.labels)
-            rotation = [label.rsplit(".", 1)[-1].startswith("r") for label in self.labels]  # rx, ry, rz
-            for name, units in (("displacement", ("mm", "rad")), ("force", ("N", "N*mm"))):
-                self.file[f"increments/control/{name}"].attrs["units"] = ",".join(units[r] for r in rotation)
         final = self.file.create_group("final")
         last = result.cycles[-1]
         for name, value in self._fields(last).items():

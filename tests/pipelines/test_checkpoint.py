@@ -47,6 +47,9 @@ def test_kill_and_resume_equals_uninterrupted_run(coarse_cylinder, tmp_path, cap
     assert not (interrupted / "results.h5").exists()
     with h5py.File(interrupted / "checkpoint.h5", "r") as file:  # whole and readable
         assert file["checkpoint"].attrs["scalars"]
+        columns = dict(file["increments/control"].attrs)  # its tables named as a finished file's
+    with h5py.File(reference / "results.h5", "r") as file:
+        assert columns == dict(file["increments/control"].attrs) and "dofs" in columns
 
     capsys.readouterr()
     assert main(["run", str(scene), "--out", str(interrupted), "--quiet", "--resume", "--json"]) == 0
