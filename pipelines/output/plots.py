@@ -190,8 +190,10 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
         if key in figures:
             axes[0].plot(equivalent, figures[key][()], label=AREA_LABELS[key])
     axes[0].set_ylabel("area / nominal area [-]")
-    axes[0].set_ylim(-0.03, 1.03)
-    axes[0].legend(fontsize=7, loc="center left")
+    # above 1 where wear or a moving patch brings points beyond the preload's area into contact
+    largest = max((np.nanmax(figures[key][()], initial=0.0) for key in AREA_LABELS if key in figures), default=1.0)
+    axes[0].set_ylim(-0.03, 1.03 * max(1.0, largest))
+    axes[0].legend(fontsize=7, loc="best")
     axes[0].grid(alpha=0.3)
     if has_clamp:
         force = clamp[()] / 1000.0
@@ -206,14 +208,15 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
     axes[-1].set_xscale("log")
     wear = np.flatnonzero(phase == 2)
     label = "equivalent real load cycles [-]"
-    if wear.size:
-        start = equivalent[wear[0] - 1] if wear[0] else 1.0
+    if wear.size and wear[0] > 0:
+        start = equivalent[wear[0] - 1]
         for ax in axes:
             ax.axvline(start, color="grey", ls="--", lw=0.8)
         axes[0].text(start, 1.0, " wear phase", transform=axes[0].get_xaxis_transform(),
                      va="bottom", fontsize=7, color="grey")
-        label += (f"; wear phase after {start:,.0f}: {wear.size} blocks "
-                  f"to {equivalent[-1]:.3g} cycles")
+        label += f"; wear phase after {start:,.0f}: {wear.size} blocks to {equivalent[-1]:.3g} cycles"
+    elif wear.size:
+        label += f"; wear phase throughout: {wear.size} blocks to {equivalent[-1]:.3g} cycles"
     axes[-1].set_xlabel(label)
     fig.suptitle(f"{title}: contact condition over cycles")
     return _save(fig, out_dir / "cycles.png")
