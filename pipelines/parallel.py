@@ -179,6 +179,13 @@ def _local_cluster(workers: int | None, retries: int, n_cases: int | None = None
                                  scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.ERROR,
                                  memory_limit=0)
         with local:
+            from distributed import Client
+
+            from pipelines.worker_signals import IgnoreCtrlC
+
+            # the scheduler keeps the plugin and hands it to every worker that joins later
+            with Client(local, set_as_default=False) as client:
+                client.register_plugin(IgnoreCtrlC())
             yield local
 
 
@@ -189,8 +196,9 @@ def _workers_ignore_ctrl_c() -> Iterator[None]:
     Ctrl-C reaches every process of the terminal's process group: a worker that took it would
     die in the middle of its case, with a traceback and leaked semaphores. The workers inherit
     the ignored signal (it survives their exec); the client alone is interrupted and closes the
-    cluster, which ends the workers. A Ctrl-C while the cluster starts (the block) is ignored, and
-    a worker started anew after its process died does not ignore it."""
+    cluster, which ends the workers. A Ctrl-C while the cluster starts (the block) is ignored; a
+    worker started anew after its process died does not inherit it
+    (:class:`pipelines.worker_signals.IgnoreCtrlC`)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return

@@ -33,6 +33,18 @@ def cubic_killing_its_worker_once(x, victim, marker):
     return cubic(x)
 
 
+def ignores_ctrl_c_after_killing_its_worker_once(x, victim, marker):
+    """Whether this case's worker ignores SIGINT; case `victim` kills its worker the first time."""
+    import signal
+
+    if x == victim and not os.path.exists(marker):
+        with open(marker, "w"):
+            pass
+        os._exit(1)
+    time.sleep(0.2)
+    return signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+
+
 def cubic_refusing_two(x):
     if x == 2:
         raise ValueError("x = 2 is out of range")
@@ -57,6 +69,23 @@ def test_a_worker_killed_mid_sweep_has_its_case_rerun_and_every_case_is_there_on
     assert all(o.error is None for o in outcomes)
     assert [o.value for o in outcomes] == [x ** 3 for x in range(8)]
     assert outcomes[4].attempts == 2  # the scheduler saw the death and re-ran the case
+
+
+@pytest.mark.parametrize("kept", [False, True], ids=["map_cases' own cluster", "one cluster for rounds"])
+def test_a_worker_started_anew_ignores_ctrl_c_too(tmp_path, kept):
+    """Ctrl-C goes to the client alone, which closes the cluster: a worker the nanny restarts
+    after its process died must ignore SIGINT like the first ones (it printed a
+    KeyboardInterrupt traceback when a limit search, whose rounds share one cluster, was
+    interrupted)."""
+    marker = tmp_path / "killed"
+    cases = [(x, {"x": x, "victim": 1, "marker": str(marker)}) for x in range(6)]
+    if kept:
+        with cluster(workers=2) as where:
+            outcomes = map_cases(ignores_ctrl_c_after_killing_its_worker_once, cases, progress=False, **where)
+    else:
+        outcomes = map_cases(ignores_ctrl_c_after_killing_its_worker_once, cases, workers=2, progress=False)
+    assert marker.exists() and outcomes[1].attempts == 2  # a worker did die and was replaced
+    assert [o.value for o in outcomes] == [True] * 6
 
 
 def test_a_failing_case_is_reported_and_the_others_complete():
