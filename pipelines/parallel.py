@@ -168,6 +168,10 @@ def _local_cluster(workers: int | None, retries: int, n_cases: int | None = None
     # case re-run until it counts as failed; one large contact case may use most of the machine.
     # The scheduler serves its health page even without a dashboard: on a free local port, not
     # on 8787 (taken by any other cluster on the machine, with a warning).
+    # silence_logs=CRITICAL: a worker's own ERROR lines are about the cluster, not the cases (a
+    # case's error comes back as its outcome, a dead worker as a retried case): when Ctrl-C
+    # closes the scheduler, a worker still heart-beating printed "Failed to communicate with
+    # scheduler during heartbeat" with a traceback before the cluster ended it.
     # The workers' environment is the thread pins only: dask's default adds
     # MALLOC_TRIM_THRESHOLD_=65536 (memory back to the OS sooner), which made the contact
     # solver's cases about 20 % slower (its large temporaries are mapped and unmapped anew).
@@ -176,7 +180,7 @@ def _local_cluster(workers: int | None, retries: int, n_cases: int | None = None
     with dask.config.set(settings):  # for the cluster's whole life: a worker that died is started anew
         with _workers_ignore_ctrl_c():
             local = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                                 scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.ERROR,
+                                 scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.CRITICAL,
                                  memory_limit=0)
         with local:
             from distributed import Client
