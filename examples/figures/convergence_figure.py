@@ -1,6 +1,9 @@
 """The README's mesh-convergence figures of the extreme case, from the runs' results files.
 
     python examples/figures/convergence_figure.py OUT.png 10=DIR 5=DIR 2.5=DIR
+    python examples/figures/convergence_figure.py OUT.png "θ 0.05=DIR" "θ 0.0125=DIR" ...
+
+A numeric label is a contact element size (mm); any other names the run as it stands.
 
 OUT.png: clamp-force loss, worn area and stick area against real cycles at each contact
 element size. OUT_joint_diagram.png beside it: the clamp force lost against the area-mean
@@ -22,6 +25,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 SCENE = Path(__file__).resolve().parents[1] / "counterweight.toml"
+
+
+def _name(label: str) -> str:
+    """A size in mm, or the label as it is."""
+    try:
+        return f"{float(label):g} mm"
+    except ValueError:
+        return label
 
 
 def history(folder: Path) -> dict:
@@ -76,11 +87,11 @@ def joint_figure(out: Path, levels: list[tuple[str, Path]]) -> None:
     for size, folder in levels:
         run = joint(folder)
         line, = ax.plot(1e3 * run["wear"], 1e-3 * run["loss"], "o-", ms=2.5, lw=1.0,
-                        label=f"{size} mm: run")
+                        label=f"{_name(size)}: run")
         top = max(top, float(run["wear"].max()))
         h = np.array([0.0, top])
         ax.plot(1e3 * h, 1e-3 * run["stiffness"] * h, "--", lw=0.9, color=line.get_color(),
-                label=f"{size} mm: joint diagram, uniform wear ({run['stiffness']:.3g} N/mm)")
+                label=f"{_name(size)}: joint diagram, uniform wear ({run['stiffness']:.3g} N/mm)")
     ax.set_xlabel("area-mean wear depth, both bodies [µm]")
     ax.set_ylabel("clamp force lost [kN]")
     ax.grid(True, alpha=0.3)
@@ -96,7 +107,7 @@ def main(out: str, *levels: str) -> None:
     for level in levels:
         size, folder = level.split("=", 1)
         run = history(Path(folder))
-        label = f"{size} mm" + ("" if run["complete"] else " (stopped early)")
+        label = _name(size) + ("" if run["complete"] else " (stopped early)")
         for ax, name in zip(axes, ("loss", "worn", "stick")):
             ax.plot(run["cycles"], run[name], label=label)
     axes[0].set_ylabel("clamp-force loss (%)")
@@ -108,12 +119,23 @@ def main(out: str, *levels: str) -> None:
     for ax in axes:
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=8)
-    figure.suptitle("counterweight_extreme (300 µm) at three contact element sizes", fontsize=10)
+    sizes = all(_name(level.split("=", 1)[0]).endswith(" mm") for level in levels)
+    figure.suptitle("counterweight_extreme (300 µm)" + (" at several contact element sizes" if sizes else ""),
+                    fontsize=10)
     figure.tight_layout()
     figure.savefig(out, dpi=120)
     plt.close(figure)
     pairs = [(size, Path(folder)) for size, folder in (level.split("=", 1) for level in levels)]
-    joint_figure(Path(out).with_name(Path(out).stem + "_joint_diagram.png"), pairs)
+    if all("dofs" in _control_attributes(folder) for _, folder in pairs):  # finished runs' files
+        joint_figure(Path(out).with_name(Path(out).stem + "_joint_diagram.png"), pairs)
+
+
+def _control_attributes(folder: Path) -> dict:
+    path = folder / "results.h5"
+    if not path.exists():
+        path = folder / "results.h5.part"
+    with h5py.File(path, "r", locking=False) as results:
+        return dict(results["increments/control"].attrs)
 
 
 if __name__ == "__main__":
