@@ -199,13 +199,15 @@ def wear_increment(response: Response, law: ContactLaw, cycle_jump: float = 1.0)
 
 
 def advance(state: ContactState, response: Response, law: ContactLaw, *,
-            cof_evolution: bool, wear: bool, cycle_jump: float = 1.0) -> tuple[ContactState, np.ndarray]:
+            cof_evolution: bool, wear: bool, cycle_jump: float = 1.0,
+            cof_jump: float = 1.0) -> tuple[ContactState, np.ndarray]:
     """History update from a converged increment; returns the new state and final status.
 
     Elastic slip is γ_tr in stick, γ_crit·n in slip and reset to 0 where open. With
-    ``cof_evolution`` μ ← min(μ + k·Δγ_sl·|τ|, μ_max) (eq. 7); with ``wear`` each body's
-    depth grows by :func:`wear_increment`. A point sliding with μ at μ_max is flagged
-    :attr:`Status.SLIP_AT_MAX`.
+    ``cof_evolution`` μ ← min(μ + J_μ·k·Δγ_sl·|τ|, μ_max) (eq. 7, J_μ = ``cof_jump``: the real
+    cycles the increment's COF change stands for, 1 unless a wear block scales it like its
+    wear); with ``wear`` each body's depth grows by :func:`wear_increment` (``cycle_jump`` J).
+    A point sliding with μ at μ_max is flagged :attr:`Status.SLIP_AT_MAX`.
     """
     slip = response.slip
     shear_norm = np.linalg.norm(response.shear, axis=1)
@@ -218,7 +220,7 @@ def advance(state: ContactState, response: Response, law: ContactLaw, *,
 
     cof = state.cof
     if cof_evolution:
-        cof = np.minimum(cof + np.asarray(law.cof_rate) * dissipation_increment, law.cof_max)
+        cof = np.minimum(cof + cof_jump * np.asarray(law.cof_rate) * dissipation_increment, law.cof_max)
     wear_depth = state.wear_depth
     if wear:
         if wear_depth is None:

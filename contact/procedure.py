@@ -79,6 +79,9 @@ class Procedure:
     (at least ``loosening_window`` blocks), so that the window means the same engine running
     time whatever the adaptive jump, which shrinks as the mesh is refined; None: over the last
     ``loosening_window`` blocks.
+    cof_jump: with ``cof_during_wear``, a wear block's COF change stands for its J real cycles as
+    its wear does (μ then saturates within a block wherever the contact slides, k ≫ w); False
+    (the paper's practice with accelerated wear): the COF changes once per block.
     stop_at_loosening: end the run as soon as loosening is evident (:func:`loosening_evident`);
     False runs the wear phase on to ``life_cycles`` (or ``wear_cycles``) so that the clamp-force
     trend of a loosening joint is seen over the whole horizon; the verdict is the same.
@@ -93,6 +96,7 @@ class Procedure:
     max_cycle_jump: float = float("inf")
     life_cycles: float = float("inf")
     cof_during_wear: bool = True
+    cof_jump: bool = False
     stationary_window: int = 10
     loosening_window: int = 20
     loosening_window_cycles: float | None = None
@@ -421,7 +425,7 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
         phases = [("cof", procedure.cof_cycles, Effects(cof_evolution=cof_evolution)),
                   ("wear", procedure.wear_cycles if wear else 0,
                    Effects(cof_evolution=cof_evolution and procedure.cof_during_wear, wear=wear,
-                           cycle_jump=current.jump))]
+                           cycle_jump=current.jump, cof_jump=procedure.cof_jump))]
         stopped_early = False
         for phase_index, (phase, n_cycles, effects) in enumerate(phases):
             if phase_index < current.first_phase or n_cycles <= 0:

@@ -82,6 +82,7 @@ class Effects:
     cof_evolution: bool = False
     wear: bool = False
     cycle_jump: float = 1.0
+    cof_jump: bool = False  # the COF's change scaled by cycle_jump too (Procedure.cof_jump)
 
 
 @dataclass(frozen=True)
@@ -572,7 +573,8 @@ def advance_with_cutbacks(solver, start, state: ContactState, amplitudes: np.nda
             continue
         equilibrium, response = solved
         state, status = advance(state, response, solver.law, cof_evolution=effects.cof_evolution,
-                                wear=effects.wear, cycle_jump=effects.cycle_jump)
+                                wear=effects.wear, cycle_jump=effects.cycle_jump,
+                                cof_jump=effects.cycle_jump if effects.cof_jump else 1.0)
         stats.substeps += 1
         done = reach
         streak += 1

@@ -99,6 +99,23 @@ def test_cof_evolution_by_dissipation_capped_at_max_and_monotone():
     assert status2[1] == Status.SLIP_AT_MAX and status2[0] == Status.SLIP
 
 
+def test_a_wear_block_scaled_cof_change_stands_for_its_real_cycles():
+    """cof_jump J: the COF rises J times a cycle's k·Δγ·|τ| (J cycles of dissipation at the
+    block's rate), capped at μ_max; the dissipation record stays one cycle's."""
+    state = _state(3, 1, cof=0.2)
+    p = 100.0
+    h = np.full(3, p / LAW.normal_stiffness)
+    slip_amount = np.array([1e-6, 1e-5, 1e-2])  # micro-slip to gross slip, mm
+    response = evaluate(h, (LAW.critical_slip + slip_amount)[:, None], state, LAW)
+    once, _ = advance(state, response, LAW, cof_evolution=True, wear=False)
+    jumped, _ = advance(state, response, LAW, cof_evolution=True, wear=False, cof_jump=500.0)
+    rise = LAW.cof_rate * slip_amount * 0.2 * p
+    assert once.cof == pytest.approx(0.2 + rise, rel=1e-12)
+    assert jumped.cof == pytest.approx(np.minimum(0.2 + 500.0 * rise, LAW.cof_max), rel=1e-12)
+    assert jumped.cof[0] < LAW.cof_max == jumped.cof[2]  # micro-slip rises, gross slip saturates
+    assert jumped.dissipation == pytest.approx(once.dissipation, rel=1e-15)
+
+
 @pytest.mark.parametrize("form", ["pressure", "shear"])
 def test_archard_wear_per_body_with_cycle_jump_and_pressure_limit(form):
     law = ContactLaw(normal_stiffness=1e5, critical_slip=1e-3, wear_coefficients=(1e-8, 3e-8),
