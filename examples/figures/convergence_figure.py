@@ -35,11 +35,15 @@ def _name(label: str) -> str:
         return label
 
 
+def _results(folder: Path) -> Path:
+    """A run's results file: results.h5, or results.h5.part of a run stopped early."""
+    path = folder / "results.h5"
+    return path if path.exists() else folder / "results.h5.part"
+
+
 def history(folder: Path) -> dict:
     """Real cycles and the per-cycle figures of a run (its wear blocks and the COF phase before)."""
-    path = folder / "results.h5"
-    if not path.exists():
-        path = folder / "results.h5.part"
+    path = _results(folder)
     with h5py.File(path, "r", locking=False) as results:
         table = results["cycles"]
         clamp = table["figures/clamp_force_N"][()]
@@ -52,9 +56,7 @@ def history(folder: Path) -> dict:
 def joint(folder: Path) -> dict:
     """Area-mean wear depth (mm) and clamp force lost (N) at the recorded cycles, and the joint
     diagram's stiffness (N/mm) from the preload: k_b·k_m/(k_b + k_m) summed over the screws."""
-    path = folder / "results.h5"
-    if not path.exists():
-        path = folder / "results.h5.part"
+    path = _results(folder)
     bolts = tomllib.loads(SCENE.read_text())["bolts"]
     with h5py.File(path, "r", locking=False) as results:
         area = results["points/area"][()]
@@ -131,10 +133,7 @@ def main(out: str, *levels: str) -> None:
 
 
 def _control_attributes(folder: Path) -> dict:
-    path = folder / "results.h5"
-    if not path.exists():
-        path = folder / "results.h5.part"
-    with h5py.File(path, "r", locking=False) as results:
+    with h5py.File(_results(folder), "r", locking=False) as results:
         return dict(results["increments/control"].attrs)
 
 

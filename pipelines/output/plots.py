@@ -185,10 +185,9 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
     has_clamp = clamp is not None and np.any(np.isfinite(clamp[()]))
     fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(7, 5.2 if has_clamp else 3.2), sharex=True)
     axes = np.atleast_1d(axes)
-    for key in ("stick_area_fraction", "slip_area_fraction", "damaged_area_fraction",
-                "worn_area_fraction", "cof_evolved_area_fraction"):
+    for key, name in AREA_LABELS.items():
         if key in figures:
-            axes[0].plot(equivalent, figures[key][()], label=AREA_LABELS[key])
+            axes[0].plot(equivalent, figures[key][()], label=name)
     axes[0].set_ylabel("area / nominal area [-]")
     # above 1 where wear or a moving patch brings points beyond the preload's area into contact
     largest = max((np.nanmax(figures[key][()], initial=0.0) for key in AREA_LABELS if key in figures), default=1.0)

@@ -4,7 +4,8 @@ its peak memory is its own).
 ``python tests/bench/scene_run.py SCENE [--size H] [--cycles N] [--linear auto|dense]
 [--solver auto|dense|sparse] [--fields OUT.npz] [--plots]`` runs ``examples/SCENE.toml`` (with
 ``contact_size = H`` mm on every body that has one; the shipped procedure unless ``--cycles``
-keeps only that many COF cycles; ``--solver`` sets ``[contact] solver``, the contact path) and prints one JSON line: verdict, points, set-up and procedure times, increments,
+keeps only that many COF cycles; ``--solver`` sets ``[contact] solver``, the contact path) and
+prints one JSON line: verdict, points, set-up and procedure times, increments,
 CPU time per increment of the procedure (energy bookkeeping and results writing included),
 peak resident memory (MB) and the load average.
 

@@ -23,8 +23,10 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "bench"))
 
 import contact.linear as linear  # noqa: E402
+import scene_run  # noqa: E402
 from pipelines import scene as scenes  # noqa: E402
 from pipelines.build import build  # noqa: E402
 from pipelines.jobs.run import run_model  # noqa: E402
@@ -62,7 +64,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     pin_process()
     path = ROOT / "examples" / "counterweight_extreme.toml"
-    overrides = {f"bodies.{body}.mesh.contact_size": args.size for body in ("counterweight", "web")}
+    overrides = scene_run.overrides(path, args.size, None)
     overrides.update({"procedure.cof_cycles": args.cof, "procedure.wear_cycles": args.wear,
                       "procedure.checkpoint_every": 0})
     model = build(scenes.load(path, overrides))
