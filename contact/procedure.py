@@ -41,6 +41,9 @@ class LoadProgram:
     shapes: pattern name → "ramp" (0→1 in the preload, then held), "cyclic" (0 in the
     preload, then sin 2πt per cycle) or "constant" (1 throughout).
     held: pattern → amplitude replacing 1 after the preload (locked bolt pretensions).
+    A cycle's ``vibration`` ∈ [0, 1] scales what vibrates in it (the cyclic patterns; a
+    tabulated history's departure from its mean) while the vibration runs up
+    (:attr:`Procedure.vibration_run_up`).
     """
 
     patterns: tuple[str, ...]
@@ -56,9 +59,10 @@ class LoadProgram:
         loads coming on, e.g. an engine's centrifugal load); None: the program has no run-up."""
         return None
 
-    def cycle(self, phase: float) -> np.ndarray:
-        """Amplitudes at the fraction ``phase`` ∈ [0, 1] of a load cycle."""
-        return np.array([np.sin(2 * np.pi * phase) if self.shapes[p] == "cyclic" else
+    def cycle(self, phase: float, vibration: float = 1.0) -> np.ndarray:
+        """Amplitudes at the fraction ``phase`` ∈ [0, 1] of a load cycle, the vibration at
+        ``vibration`` of its full amplitude."""
+        return np.array([vibration * np.sin(2 * np.pi * phase) if self.shapes[p] == "cyclic" else
                          self.held.get(p, 1.0) for p in self.patterns])
 
 
@@ -82,6 +86,11 @@ class Procedure:
     cof_jump: with ``cof_during_wear``, a wear block's COF change stands for its J real cycles as
     its wear does (μ then saturates within a block wherever the contact slides, k ≫ w); False
     (the paper's practice with accelerated wear): the COF changes once per block.
+    vibration_run_up: the first this many COF-phase cycles bring the vibration in linearly from
+    0 to its full amplitude (an engine reaching the operating point, or an overload building
+    up, over many cycles: the COF hardens as the vibration grows, instead of a step to full
+    amplitude that can exceed the friction capacity at μ0 before the COF has risen); 0: full
+    amplitude from the first cycle. Shakedown is not judged before the run-up ends.
     stop_at_loosening: end the run as soon as loosening is evident (:func:`loosening_evident`);
     False runs the wear phase on to ``life_cycles`` (or ``wear_cycles``) so that the clamp-force
     trend of a loosening joint is seen over the whole horizon; the verdict is the same.
@@ -97,6 +106,7 @@ class Procedure:
     life_cycles: float = float("inf")
     cof_during_wear: bool = True
     cof_jump: bool = False
+    vibration_run_up: int = 0
     stationary_window: int = 10
     loosening_window: int = 20
     loosening_window_cycles: float | None = None
@@ -299,8 +309,9 @@ class _Run:
         worst = np.zeros(solver.n_points, dtype=np.int8)
         ever_closed = np.zeros(solver.n_points, dtype=bool)
         for k in range(1, n_inc + 1):
-            status = self.step(self.program.cycle(k / n_inc), effects, phase, self.cycle_number,
-                               self.cycle_number - 1 + k / n_inc)
+            t = self.cycle_number - 1 + k / n_inc
+            status = self.step(self.program.cycle(k / n_inc, self.vibration(phase, t)), effects, phase,
+                               self.cycle_number, t)
             utilisation, shear_now = _utilisation(self.equilibrium, solver)
             max_util, max_shear = np.maximum(max_util, utilisation), np.maximum(max_shear, shear_now)
             worst = np.maximum(worst, status)
@@ -325,6 +336,12 @@ class _Run:
         summary.figures["clamp_force_N"] = summary.clamp_force
         return summary
 
+    def vibration(self, phase: str, t: float) -> float:
+        """The vibration's fraction of its full amplitude at cycle time ``t`` (cycles since the
+        preload) of ``phase``: it runs up linearly over the first ``vibration_run_up`` cycles."""
+        run_up = self.procedure.vibration_run_up
+        return 1.0 if phase != "cof" or run_up <= 0 else min(1.0, t / run_up)
+
     def phase(self, phase_index, phase, n_cycles, effects, checkpoint, checkpoint_every) -> bool:
         """Run the cycles of one phase; True when the run stops early (shakedown or loosening)."""
         resuming = phase_index == self.first_phase and self.done_in_phase > 0
@@ -344,7 +361,8 @@ class _Run:
             del self.history[:-loosening_window_blocks(self.history, self.procedure)]
             self.observer.cycle(summary)
             slid = summary.figures["active_slip_area_fraction"] > self.procedure.area_tolerance
-            self.quiet_cycles = 0 if slid else self.quiet_cycles + 1
+            running_up = self.vibration(phase, self.cycle_number - 1) < 1.0  # began below full amplitude
+            self.quiet_cycles = 0 if slid or running_up else self.quiet_cycles + 1
             loosening = False
             if self.quiet_cycles >= self.procedure.stationary_window:
                 self.stationary = True

@@ -32,11 +32,12 @@ class TabulatedProgram(LoadProgram):
             amplitudes[self.patterns.index(name)] = fraction * float(np.mean(samples))
         return amplitudes
 
-    def cycle(self, phase: float) -> np.ndarray:
-        amplitudes = super().cycle(phase)
+    def cycle(self, phase: float, vibration: float = 1.0) -> np.ndarray:
+        amplitudes = super().cycle(phase, vibration)
         for name, samples in self.tables.items():
             n = len(samples)
             periodic = np.concatenate([[samples[-1]], samples])
-            amplitudes[self.patterns.index(name)] = np.interp(phase % 1.0 if phase != 1.0 else 1.0,
-                                                              np.arange(n + 1) / n, periodic)
+            value = np.interp(phase % 1.0 if phase != 1.0 else 1.0, np.arange(n + 1) / n, periodic)
+            mean = float(np.mean(samples))
+            amplitudes[self.patterns.index(name)] = value if vibration == 1.0 else mean + vibration * (value - mean)
         return amplitudes

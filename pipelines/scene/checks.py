@@ -210,12 +210,21 @@ def _check_bolts(data, problems):
                 problems.append(f"'bolts.{name}.{end}' names '{bolt[end]}', which is not a reference point")
 
 
+def _check_procedure(data, problems):
+    procedure = data.get("procedure", {})
+    run_up, cof_cycles = procedure.get("vibration_run_up", 0), procedure.get("cof_cycles", 0)
+    if isinstance(run_up, int) and isinstance(cof_cycles, int) and run_up > cof_cycles:
+        problems.append(f"'procedure.vibration_run_up' ({run_up}) must not exceed 'procedure.cof_cycles' "
+                        f"({cof_cycles}): the vibration runs up within the COF phase")
+
+
 #: Semantic checks and the tables each reads (run when the schema found those tables sound).
 SEMANTIC_CHECKS = ((_check_effects, ("scene", "materials", "bodies", "coupling")),
                    (_check_bodies, ("scene", "materials", "bodies")),
                    (_check_contact, ("scene", "bodies", "contact")),
                    (_check_bolts, ("scene", "bodies", "bolts")),
-                   (_check_patterns, ("materials", "bodies")))
+                   (_check_patterns, ("materials", "bodies")),
+                   (_check_procedure, ("procedure",)))
 
 
 # Plausibility: magnitudes that are valid but most likely a unit mistake. Each is a warning

@@ -132,8 +132,8 @@ class Scaled(procedure.LoadProgram):
     def preload(self, fraction):
         return super().preload(fraction) * self.scale
 
-    def cycle(self, phase):
-        return super().cycle(phase) * self.scale
+    def cycle(self, phase, vibration=1.0):
+        return super().cycle(phase, vibration) * self.scale
 
 
 def _worn_punch():
