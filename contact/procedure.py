@@ -84,8 +84,11 @@ class Procedure:
     time whatever the adaptive jump, which shrinks as the mesh is refined; None: over the last
     ``loosening_window`` blocks.
     cof_jump: with ``cof_during_wear``, a wear block's COF change stands for its J real cycles as
-    its wear does (μ then saturates within a block wherever the contact slides, k ≫ w); False
-    (the paper's practice with accelerated wear): the COF changes once per block.
+    its wear does (μ then saturates within a block wherever the contact slides, k ≫ w): the
+    default, so that COF and wear stand for the same running time and the result does not
+    depend on the number of blocks; False (the paper's practice with accelerated wear): the
+    COF changes once per block, which makes a wear phase with the COF evolving depend on the
+    jump tolerance (more blocks, more COF per real cycle).
     vibration_run_up: the first this many COF-phase cycles bring the vibration in linearly from
     0 to its full amplitude (an engine reaching the operating point, or an overload building
     up, over many cycles: the COF hardens as the vibration grows, instead of a step to full
@@ -105,7 +108,7 @@ class Procedure:
     max_cycle_jump: float = float("inf")
     life_cycles: float = float("inf")
     cof_during_wear: bool = True
-    cof_jump: bool = False
+    cof_jump: bool = True
     vibration_run_up: int = 0
     stationary_window: int = 10
     loosening_window: int = 20

@@ -148,7 +148,7 @@ SCHEMA = {
                            "adaptive jump: the largest J"),
         "life_cycles": (NUMBER, False, _positive, "real cycles the wear phase stands for at most"),
         "cof_during_wear": (bool, False, None, "keep COF evolving in the wear phase"),
-        "cof_jump": (bool, False, None, "scale the wear phase's COF change by the cycle jump, as its wear"),
+        "cof_jump": (bool, False, None, "scale the wear phase's COF change by the cycle jump, as its wear (default true)"),
         "vibration_run_up": (int, False, _integer_at_least(0),
                              "COF-phase cycles over which the vibration grows from 0 to full amplitude"),
         "wear_cap": (NUMBER, False, _positive, "largest wear increment per step, mm"),

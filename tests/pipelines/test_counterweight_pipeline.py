@@ -299,7 +299,8 @@ def test_sweep_margins_are_limit_over_calibrated_amplitude(tmp_path, monkeypatch
 
 
 def test_a_repeated_amplitude_run_is_read_from_the_cache(tmp_path):
-    overrides = dict(COARSE, **{"procedure.cof_cycles": 3, "procedure.wear_cycles": 0})
+    overrides = dict(COARSE, **{"procedure.cof_cycles": 3, "procedure.vibration_run_up": 0,
+                                  "procedure.wear_cycles": 0})
     before = stages.EXECUTIONS["contact_run"]
     first = limits.run_amplitude(str(SCENE), overrides, 0.1, str(tmp_path))
     again = limits.run_amplitude(str(SCENE), overrides, 0.1, str(tmp_path))

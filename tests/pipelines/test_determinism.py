@@ -94,6 +94,7 @@ n_modes = 4
 revolutions = 2.0
 [procedure]
 cof_cycles = 6
+vibration_run_up = 3
 wear_cycles = 4
 """)
     _run(scene, tmp_path / "one", threads=1)

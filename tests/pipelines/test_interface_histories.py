@@ -25,6 +25,7 @@ revolutions = 2.0
 [procedure]
 increments_per_cycle = 8
 cof_cycles = 6
+vibration_run_up = 0
 wear_cycles = 2
 cycle_jump = 20.0
 stationary_window = 3
