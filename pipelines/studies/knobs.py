@@ -160,6 +160,16 @@ def _capped(proc: dict, key: str, quick: bool, default: int) -> int:
     return min(proc.get(key, default), CYCLE_CAPS[quick][key])
 
 
+def _run_up_within(scene: scenes.Scene, cof_cycles: int) -> dict:
+    """A shortened COF phase keeps the vibration's run-up the same share of it (the run-up
+    must lie within the COF phase)."""
+    proc = scene.data.get("procedure", {})
+    run_up, original = proc.get("vibration_run_up", 0), proc.get("cof_cycles", procedure.Procedure().cof_cycles)
+    if run_up <= cof_cycles:
+        return {}
+    return {"procedure.vibration_run_up": int(round(run_up * cof_cycles / original))}
+
+
 def base_overrides(scene: scenes.Scene, quick: bool) -> dict:
     """Overrides that shorten the scene's phases to the study's caps (none if already short)."""
     proc = scene.data.get("procedure", {})
@@ -169,6 +179,8 @@ def base_overrides(scene: scenes.Scene, quick: bool) -> dict:
         capped = _capped(proc, key, quick, getattr(defaults, key))
         if capped != proc.get(key, getattr(defaults, key)):
             out[f"procedure.{key}"] = capped
+    if "procedure.cof_cycles" in out:
+        out.update(_run_up_within(scene, out["procedure.cof_cycles"]))
     return out
 
 
@@ -180,6 +192,8 @@ def setting_overrides(scene: scenes.Scene, settings: dict) -> dict:
             out.update({key: float(value) for key in _contact_size_keys(scene.data)})
         elif name in ("increments_per_cycle", "cof_cycles"):
             out[f"procedure.{name}"] = int(value)
+            if name == "cof_cycles":
+                out.update(_run_up_within(scene, int(value)))
         elif name in ("normal_stiffness", "critical_slip"):
             out[f"contact.{name}"] = float(value)
         elif name == "cycle_jump":

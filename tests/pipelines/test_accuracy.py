@@ -8,7 +8,8 @@ import pytest
 
 from pipelines import scene as scenes
 from pipelines.studies.accuracy import accuracy_study
-from pipelines.studies.knobs import TOLERANCE, Run, errors, knobs_for, pareto_front, recommend, setting_overrides
+from pipelines.studies.knobs import (TOLERANCE, Run, base_overrides, errors, knobs_for, pareto_front, recommend,
+                                     setting_overrides)
 from pipelines.cli.main import main
 
 
@@ -51,6 +52,21 @@ def test_cycle_jump_keeps_the_equivalent_cycles(coarse_cylinder):
     overrides = setting_overrides(scene, {"cycle_jump": jump.values[-1]})
     assert overrides["procedure.wear_cycles"] * overrides["procedure.cycle_jump"] == pytest.approx(2000.0)
     assert {"craig_bampton_modes", "mbs_time_step", "cof_cycles"} <= set(not_applicable)
+
+
+def test_a_shortened_cof_phase_keeps_the_vibration_run_up_inside_it():
+    """The counterweight's vibration runs up over 50 of its 150 COF cycles; the study's caps
+    (40, or 10 with --quick) and the cof_cycles knob keep that share, and the scenes they make
+    are valid."""
+    from pathlib import Path
+    path = Path(__file__).resolve().parents[2] / "examples" / "counterweight.toml"
+    scene = scenes.load(path)
+    for quick, cof_cycles, run_up in ((False, 40, 13), (True, 10, 3)):
+        overrides = base_overrides(scene, quick)
+        assert (overrides["procedure.cof_cycles"], overrides["procedure.vibration_run_up"]) == (cof_cycles, run_up)
+        scenes.load(path, overrides)  # raises InputError if the run-up exceeded the COF phase
+    assert setting_overrides(scene, {"cof_cycles": 30})["procedure.vibration_run_up"] == 10
+    assert "procedure.vibration_run_up" not in setting_overrides(scene, {"cof_cycles": 60})
 
 
 def test_study_on_a_tiny_sweep_of_the_coarse_cylinder(coarse_cylinder):
