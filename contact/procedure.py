@@ -361,7 +361,8 @@ class _Run:
             if phase == "wear" and self.adaptive:
                 self.jump = self.next_jump(self.state.gap - worn_before, summary, effects.cycle_jump)
             self.history.append(summary)
-            del self.history[:-loosening_window_blocks(self.history, self.procedure)]
+            del self.history[:-max(loosening_window_blocks(self.history, self.procedure),
+                                   self.procedure.stationary_window + 1)]
             self.observer.cycle(summary)
             slid = summary.figures["active_slip_area_fraction"] > self.procedure.area_tolerance
             running_up = self.vibration(phase, self.cycle_number - 1) < 1.0  # began below full amplitude
@@ -395,6 +396,14 @@ class _Run:
                                                     self.solver.law.normal_stiffness)
         return self._local_stiffness
 
+    def stuck_since(self) -> float:
+        """Real cycles after which the contact no longer slid: the end of the cycle before the
+        quiet window that made it stationary (the window only confirms it, and with an adaptive
+        jump its blocks grow twofold each, so its end would overstate the time to shakedown
+        about a thousandfold)."""
+        window = self.procedure.stationary_window
+        return self.history[-window - 1].equivalent_cycles if len(self.history) > window else 0.0
+
     def snapshot(self, phase_index, cycles_in_phase) -> Snapshot:
         return Snapshot(self.cycle_number, phase_index, cycles_in_phase, self.quiet_cycles, self.equivalent,
                         self.nominal_area, self.initial_clamp,
@@ -410,7 +419,7 @@ class _Run:
         figures["equivalent_cycles"] = self.equivalent
         figures["nominal_contact_area"] = self.nominal_area
         if self.stationary:
-            figures["shakedown_at_cycles"] = self.equivalent
+            figures["shakedown_at_cycles"] = self.stuck_since()
         if self.loosening_at is not None:
             figures["loosening_evident_at_cycles"] = self.loosening_at
         if self.bolts is not None:

@@ -48,10 +48,16 @@ def test_normal_operation_stays_stuck(tmp_path, cache):
 def test_severe_overload_shakes_down_to_stick_after_partial_slip(tmp_path, cache):
     summary, figures, phase = run("counterweight_severe", tmp_path, cache)
     assert summary["verdict"] == "stick" and summary["stationary"]
-    assert figures["active_slip_area_fraction"][phase == 1].max() > 0.05  # sliding at first ...
+    sliding = figures["active_slip_area_fraction"][phase == 1]
+    assert sliding.max() > 0.05  # sliding at first ...
+    assert sliding.max() < 0.9  # ... in partial slip: a part of the contact sticks in every cycle
     assert summary["cof_evolved_area_fraction"] > 0.1  # ... so the COF rose where it slid
     assert summary["clamp_force_loss_fraction"] < 0.01  # shaken down before wear could loosen it
-    assert summary["shakedown_at_cycles"] == summary["equivalent_cycles"]
+    # in the wear phase (the contact still slid at the end of the COF phase), dated from the last
+    # block that slid: the quiet blocks after it only confirm it
+    cof_cycles = scenes.load(EXAMPLES / "counterweight_severe.toml").data["procedure"]["cof_cycles"]
+    assert figures["active_slip_area_fraction"][phase == 1][-1] > 0.05
+    assert cof_cycles < summary["shakedown_at_cycles"] < summary["equivalent_cycles"]
 
 
 def test_extreme_overload_loosens_under_wear(tmp_path, cache):
