@@ -7,7 +7,7 @@
 5. speed sweep of the multibody model and the fretting safety margin at every speed.
 
 The demo runs a shorter procedure than the shipped scene (``DEMO_OVERRIDES``: 60 COF cycles,
-30 wear cycles) so that it finishes in a few minutes on a 2-core machine; stages
+30 wear cycles; the vibration's run-up kept the same share of the COF phase) so that it finishes in a few minutes on a 2-core machine; stages
 whose inputs are unchanged are read from the stage cache on a second run.
 """
 
@@ -50,9 +50,12 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
     from pipelines.jobs.margins import describe_margins, margins_of, plot_margins, write_margins
     from pipelines.jobs.run import run_scene
     from pipelines.stages import StageCache
+    from pipelines.studies.knobs import run_up_within
 
     out_dir = Path(out_dir)
     overrides = dict(DEMO_OVERRIDES if overrides is None else overrides)
+    if "procedure.cof_cycles" in overrides and "procedure.vibration_run_up" not in overrides:
+        overrides.update(run_up_within(scenes.load(scene_path), overrides["procedure.cof_cycles"]))
     scene = scenes.load(scene_path, overrides)
     cache = StageCache(cache_dir)
     outcome = run_scene(scene, out_dir / "operating", progress=progress, cache=cache)

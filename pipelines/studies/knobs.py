@@ -160,7 +160,7 @@ def _capped(proc: dict, key: str, quick: bool, default: int) -> int:
     return min(proc.get(key, default), CYCLE_CAPS[quick][key])
 
 
-def _run_up_within(scene: scenes.Scene, cof_cycles: int) -> dict:
+def run_up_within(scene: scenes.Scene, cof_cycles: int) -> dict:
     """A shortened COF phase keeps the vibration's run-up the same share of it (the run-up
     must lie within the COF phase)."""
     proc = scene.data.get("procedure", {})
@@ -180,7 +180,7 @@ def base_overrides(scene: scenes.Scene, quick: bool) -> dict:
         if capped != proc.get(key, getattr(defaults, key)):
             out[f"procedure.{key}"] = capped
     if "procedure.cof_cycles" in out:
-        out.update(_run_up_within(scene, out["procedure.cof_cycles"]))
+        out.update(run_up_within(scene, out["procedure.cof_cycles"]))
     return out
 
 
@@ -193,7 +193,7 @@ def setting_overrides(scene: scenes.Scene, settings: dict) -> dict:
         elif name in ("increments_per_cycle", "cof_cycles"):
             out[f"procedure.{name}"] = int(value)
             if name == "cof_cycles":
-                out.update(_run_up_within(scene, int(value)))
+                out.update(run_up_within(scene, int(value)))
         elif name in ("normal_stiffness", "critical_slip"):
             out[f"contact.{name}"] = float(value)
         elif name == "cycle_jump":

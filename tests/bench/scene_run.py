@@ -40,6 +40,7 @@ from pipelines import scene as scenes  # noqa: E402
 from pipelines.build import build  # noqa: E402
 from pipelines.coupling import multibody_loading  # noqa: E402
 from pipelines.jobs.run import run_model  # noqa: E402
+from pipelines.studies.knobs import run_up_within  # noqa: E402
 from reduction.threads import pin_process  # noqa: E402
 
 #: the linear solvers a run can be asked for: the shipped choice, and the exact dense LU of
@@ -57,6 +58,7 @@ def overrides(path: Path, size: float | None, cycles: int | None, solver: str = 
                     if "contact_size" in body.get("mesh", {})})
     if cycles is not None:
         out.update({"procedure.cof_cycles": cycles, "procedure.wear_cycles": 0})
+        out.update(run_up_within(scenes.load(path), cycles))
     return out
 
 

@@ -30,6 +30,7 @@ import scene_run  # noqa: E402
 from pipelines import scene as scenes  # noqa: E402
 from pipelines.build import build  # noqa: E402
 from pipelines.jobs.run import run_model  # noqa: E402
+from pipelines.studies.knobs import run_up_within  # noqa: E402
 from reduction.threads import pin_process  # noqa: E402
 
 THRESHOLDS = (1e-4, 1e-3, 1e-2, 3e-2)
@@ -67,6 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     overrides = scene_run.overrides(path, args.size, None)
     overrides.update({"procedure.cof_cycles": args.cof, "procedure.wear_cycles": args.wear,
                       "procedure.checkpoint_every": 0})
+    overrides.update(run_up_within(scenes.load(path), args.cof))
     model = build(scenes.load(path, overrides))
     rows, counters = [], []
     probe(rows, counters)

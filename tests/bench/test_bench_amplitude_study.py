@@ -14,10 +14,13 @@ import numpy as np
 import pytest
 
 from pipelines.parallel import map_cases
+from pipelines import scene as scenes
 from pipelines.jobs.limit import run_amplitude
+from pipelines.studies.knobs import run_up_within
 
 SCENE = Path(__file__).resolve().parents[2] / "examples" / "counterweight.toml"
-OVERRIDES = {"procedure.cof_cycles": 40, "procedure.wear_cycles": 20}
+OVERRIDES = {"procedure.cof_cycles": 40, "procedure.wear_cycles": 20,
+             **run_up_within(scenes.load(SCENE), 40)}
 
 
 def study(workers: int):
