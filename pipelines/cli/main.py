@@ -78,8 +78,9 @@ def _human_summary(outcome) -> str:
     s = outcome.summary
     lines = [f"scene {s['scene']}: verdict {s['verdict'].upper()}"
              f"{'' if s['stationary'] else ' (not yet stationary)'} after {s['cycles_run']} cycles",
-             f"  in the last cycle: stick {s['stick_area_fraction']:.1%}, slip {s['slip_area_fraction']:.1%}, "
-             f"damaged {s['damaged_area_fraction']:.1%} of the area closed by the preload"
+             f"  in the last cycle: stick {s['stick_area_fraction']:.1%}, at the friction limit (slip) "
+             f"{s['slip_area_fraction']:.1%}, of it at μ_max (damaged) {s['damaged_area_fraction']:.1%} "
+             f"of the area closed by the preload"
              + _widened(s['slip_area_fraction'] + s['stick_area_fraction'], s['damaged_area_fraction'],
                         s['cof_evolved_area_fraction']),
              f"  still sliding (the verdict's measure) {s.get('active_slip_area_fraction', s['slip_area_fraction']):.1%}, "
