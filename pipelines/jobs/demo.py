@@ -7,8 +7,9 @@
 5. speed sweep of the multibody model and the fretting safety margin at every speed.
 
 The demo runs a shorter procedure than the shipped scene (``DEMO_OVERRIDES``: 60 COF cycles,
-30 wear cycles; the vibration's run-up kept the same share of the COF phase) so that it finishes in a few minutes on a 2-core machine; stages
-whose inputs are unchanged are read from the stage cache on a second run.
+30 wear cycles; the vibration's run-up kept the same share of the COF phase) so that it
+finishes in a few minutes on a 2-core machine; stages whose inputs are unchanged are read from
+the stage cache on a second run.
 """
 
 from __future__ import annotations
