@@ -40,6 +40,17 @@ class DemoResult:
     files: dict = field(default_factory=dict)
 
 
+def _overrides(scene_path, overrides) -> dict:
+    """The demo's scene overrides; a shortened COF phase keeps the scene's run-up share of it."""
+    from pipelines import scene as scenes
+    from pipelines.studies.knobs import run_up_within
+
+    out = dict(DEMO_OVERRIDES if overrides is None else overrides)
+    if "procedure.cof_cycles" in out and "procedure.vibration_run_up" not in out:
+        out.update(run_up_within(scenes.load(scene_path), out["procedure.cof_cycles"]))
+    return out
+
+
 def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DEMO_SPEEDS_RPM,
              amplitude_range_mm=DEMO_AMPLITUDE_RANGE_MM, tolerance_mm=DEMO_TOLERANCE_MM, cache_dir=None,
              workers=None, progress=True) -> DemoResult:
@@ -51,12 +62,9 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
     from pipelines.jobs.margins import describe_margins, margins_of, plot_margins, write_margins
     from pipelines.jobs.run import run_scene
     from pipelines.stages import StageCache
-    from pipelines.studies.knobs import run_up_within
 
     out_dir = Path(out_dir)
-    overrides = dict(DEMO_OVERRIDES if overrides is None else overrides)
-    if "procedure.cof_cycles" in overrides and "procedure.vibration_run_up" not in overrides:
-        overrides.update(run_up_within(scenes.load(scene_path), overrides["procedure.cof_cycles"]))
+    overrides = _overrides(scene_path, overrides)
     scene = scenes.load(scene_path, overrides)
     cache = StageCache(cache_dir)
     outcome = run_scene(scene, out_dir / "operating", progress=progress, cache=cache)
