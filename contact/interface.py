@@ -253,14 +253,18 @@ def kinematic_operator(pairing: Pairing, slave_dofs: np.ndarray, master_dofs: np
     """
     n, dim = pairing.normal.shape
     frame = np.concatenate([pairing.normal[:, None, :], pairing.tangents], axis=1)  # (n, dim, dim)
-    row_ids = (np.arange(n)[:, None] * dim + np.arange(dim)[None, :])  # (n, dim rows)
-    rows, cols, vals = [], [], []
+    cols, vals = [], []
     slave_nodes, slave_weights = pairing.slave_side()
     for node_dofs, nodes, weights in ((slave_dofs, slave_nodes, slave_weights),
                                       (master_dofs, pairing.master_nodes, -pairing.weights)):
         k = weights.shape[1]
-        rows.append(np.broadcast_to(row_ids[:, None, :, None], (n, k, dim, dim)).ravel())
-        cols.append(np.broadcast_to(node_dofs[nodes][:, :, None, :], (n, k, dim, dim)).ravel())
-        vals.append((weights[:, :, None, None] * frame[:, None, :, :]).ravel())
-    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(n * dim, n_columns))
+        # entries (point, row, node, component): every row of a point has the same columns
+        cols.append(np.broadcast_to(node_dofs[nodes][:, None, :, :], (n, dim, k, dim)).reshape(n, dim, -1))
+        vals.append((weights[:, None, :, None] * frame[:, :, None, :]).reshape(n, dim, -1))
+    cols, vals = np.concatenate(cols, axis=2), np.concatenate(vals, axis=2)
+    width = cols.shape[2]
+    # built as CSR directly (every row has ``width`` entries), then summed where padded
+    # weights repeat a node: scipy's COO → CSR conversion costs more at every re-pairing
+    G = sp.csr_matrix((vals.ravel(), cols.ravel(), np.arange(n * dim + 1) * width), shape=(n * dim, n_columns))
+    G.sum_duplicates()
+    return G

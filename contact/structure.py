@@ -74,6 +74,19 @@ class Structure:
         return tuple(self.loads) + tuple(self.motions)
 
 
+def _columns(matrix: sp.csr_matrix, columns: np.ndarray) -> sp.csr_matrix:
+    """matrix[:, columns] for sorted ``columns``, by a map of the CSR entries (scipy's fancy
+    column indexing costs several times more on a small operator re-formed at every re-pairing)."""
+    position = np.full(matrix.shape[1], -1)
+    position[columns] = np.arange(columns.size)
+    new = position[matrix.indices]
+    kept = new >= 0
+    counts = np.bincount(np.repeat(np.arange(matrix.shape[0]), np.diff(matrix.indptr))[kept],
+                         minlength=matrix.shape[0])
+    return sp.csr_matrix((matrix.data[kept], new[kept], np.concatenate([[0], np.cumsum(counts)])),
+                         shape=(matrix.shape[0], columns.size))
+
+
 def _diagonal_blocks(matrix: np.ndarray, index: np.ndarray) -> list[np.ndarray]:
     """Split ``index`` into runs whose rows and columns of ``matrix`` couple only within the run.
 
@@ -116,15 +129,22 @@ class _BlockFactor:
     def congruence(self, operator: sp.csr_matrix) -> np.ndarray:
         """operator·K⁻¹·operatorᵀ, one body block at a time (no dense global operator)."""
         result = np.zeros((operator.shape[0], operator.shape[0]))
-        columns = operator.tocsc()
+        operator = operator.tocsr()
+        row_of_entry = np.repeat(np.arange(operator.shape[0]), np.diff(operator.indptr))
         for block, inverse in zip(self.blocks, self.inverses):
-            # a block is a run of consecutive eliminated DOFs: its columns are one slice
-            part = columns[:, block[0]:block[-1] + 1]
-            touched = np.unique(part.indices)
+            # a block is a run of consecutive eliminated DOFs: its columns are one range
+            # (selected on the CSR entries: scipy's column slicing costs more than the products
+            # for a small interface that re-pairs every few increments)
+            inside = (operator.indices >= block[0]) & (operator.indices <= block[-1])
+            counts = np.bincount(row_of_entry[inside], minlength=operator.shape[0])
+            touched = np.flatnonzero(counts)
             if touched.size == 0:
                 continue
+            part = sp.csr_matrix((operator.data[inside], operator.indices[inside] - block[0],
+                                  np.concatenate([[0], np.cumsum(counts)])),
+                                 shape=(operator.shape[0], block.size))
             if 2 * touched.size < operator.shape[0]:  # a body few rows touch: those rows only
-                rows = part[touched].tocsr()
+                rows = part[touched]
                 result[np.ix_(touched, touched)] += np.asarray(rows @ np.asarray(rows @ inverse).T)
             else:
                 # G·(G·K⁻¹)ᵀ = G·K⁻¹·Gᵀ (K⁻¹ symmetric), both products sparse times dense
@@ -264,9 +284,11 @@ class ContactSpace:
     def _split(self, structure: Structure) -> tuple[np.ndarray, np.ndarray]:
         """(eliminated DOFs c, control DOFs q) of a structure's free DOFs."""
         n = structure.n_dofs
-        free = np.setdiff1d(np.arange(n), np.asarray(structure.prescribed, dtype=int))
+        is_free = np.ones(n, dtype=bool)
+        is_free[np.asarray(structure.prescribed, dtype=int)] = False
+        free = np.flatnonzero(is_free)
         in_contact = np.zeros(n, dtype=bool)
-        in_contact[np.unique(structure.contact_operator.tocsr().indices)] = True
+        in_contact[structure.contact_operator.tocsr().indices] = True
         if structure.surface_dofs is not None:
             in_contact[structure.surface_dofs] = True
         return self._split_free(free, in_contact)
@@ -274,7 +296,7 @@ class ContactSpace:
     def _pair(self, structure: Structure) -> None:
         """The operators that depend on the pairing: G_c, W, E and the pattern gaps g_f."""
         self.structure = structure
-        self.Gc = structure.contact_operator.tocsr()[:, self.contact_dofs].tocsr()
+        self.Gc = _columns(structure.contact_operator.tocsr(), self.contact_dofs)
         self._GcT = self.Gc.T.tocsr()
         self._form_compliance()
         self.E = np.asarray(self.Gc @ self.compliance_Kcq)
