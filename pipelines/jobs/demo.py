@@ -59,7 +59,7 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
     from pipelines import scene as scenes
     from pipelines.coupling import multibody_params
     from pipelines.jobs.limit import find_limit, plot_limit, write_limit
-    from pipelines.jobs.margins import describe_margins, margins_of, plot_margins, write_margins
+    from pipelines.jobs.margins import margins_of, plot_margins, write_margins
     from pipelines.jobs.run import run_scene
     from pipelines.stages import StageCache
 
@@ -89,10 +89,25 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
     margin_plot = plot_margins(margins, out_dir / "margins.png", f"{scene.name}: fretting safety margin")
     times["speed_sweep_s"] = time.perf_counter() - clock
 
-    s = outcome.summary
+    summary = _summary(scene.name, outcome.summary, limit, margins, times)
+    files = {"results": str(outcome.results_path), "plots": str(out_dir / "operating" / "plots"),
+             "limit_plot": str(limit_plot), "margins_plot": str(margin_plot), "sweep": str(sweep_path)}
+    (out_dir / "summary.json").write_text(json.dumps({"summary": summary, "stage_times_s": times, "files": files},
+                                                     indent=2, default=float))
+    from pipelines.output.report import write_report
+
+    files["report"] = str(write_report(out_dir))
+    return DemoResult(summary, times, files)
+
+
+def _summary(name: str, s: dict, limit, margins, times: dict) -> dict:
+    """The demo's summary: the operating run (``s``, its run summary), the amplitude limit,
+    the margins over the speed sweep and the total wall time (s)."""
+    from pipelines.jobs.margins import describe_margins
+
     operating_margin = limit.margin_limit_mm / s["wing_amplitude_mm"]
-    summary = {
-        "scene": scene.name,
+    return {
+        "scene": name,
         "engine_speed_rpm": s["engine_speed_rpm"],
         "wing_amplitude_um": 1e3 * s["wing_amplitude_mm"],
         "verdict": s["verdict"],
@@ -109,14 +124,6 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
         "margins": describe_margins(margins),
         "wall_time_s": sum(times.values()),
     }
-    files = {"results": str(outcome.results_path), "plots": str(out_dir / "operating" / "plots"),
-             "limit_plot": str(limit_plot), "margins_plot": str(margin_plot), "sweep": str(sweep_path)}
-    (out_dir / "summary.json").write_text(json.dumps({"summary": summary, "stage_times_s": times, "files": files},
-                                                     indent=2, default=float))
-    from pipelines.output.report import write_report
-
-    files["report"] = str(write_report(out_dir))
-    return DemoResult(summary, times, files)
 
 
 def describe(result: DemoResult) -> str:

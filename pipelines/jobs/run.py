@@ -156,12 +156,23 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     stage_times["procedure_s"] = time.perf_counter() - clock
     clock = time.perf_counter()
     path = writer.finish(result)
+    written = _write_outputs(path, out_dir, plots, writer.output_increments)
+    stage_times["outputs_s"] = time.perf_counter() - clock
+    return Outcome(_summary(model, solver, result, writer), path, written, stage_times)
+
+
+def _write_outputs(path: Path, out_dir: Path, plots: bool, increments: bool) -> list:
+    """Plots (when asked for) and the ParaView files of a finished results file; the plots written."""
     written = plot_results(path, out_dir / "plots") if plots else []
     write_interface_series(path, out_dir / "interface.xdmf")
     write_final_vtu(path, out_dir / "interface_final.vtu")
-    if writer.output_increments:
+    if increments:
         write_increment_series(path, out_dir / "interface_increments.xdmf")
-    stage_times["outputs_s"] = time.perf_counter() - clock
+    return written
+
+
+def _summary(model: Model, solver, result, writer: ResultsWriter) -> dict:
+    """The run summary: verdict and figures, the solver paths taken, the coupling's figures."""
     summary = {"scene": model.scene.name, "verdict": result.verdict, "stationary": result.stationary,
                **result.figures, "contact_solver": contact_solver(model),
                "linear_solver": _linear_solver(solver).description()}
@@ -172,7 +183,7 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
         summary.update(_engine_hours(summary))
     if writer.snapshot is not None:
         summary["resumed_from_cycle"] = writer.snapshot.cycle_number
-    return Outcome(summary, path, written, stage_times)
+    return summary
 
 
 def _engine_hours(summary: dict) -> dict:

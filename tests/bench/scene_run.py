@@ -52,13 +52,15 @@ def overrides(path: Path, size: float | None, cycles: int | None, solver: str = 
     """Scene overrides: the contact mesh size of every body that has one, the cycles and the
     contact path."""
     out = {} if solver == "auto" else {"contact.solver": solver}
+    if size is None and cycles is None:
+        return out
+    scene = scenes.load(path)
     if size is not None:
-        bodies = scenes.load(path).data["bodies"]
-        out.update({f"bodies.{name}.mesh.contact_size": size for name, body in bodies.items()
+        out.update({f"bodies.{name}.mesh.contact_size": size for name, body in scene.data["bodies"].items()
                     if "contact_size" in body.get("mesh", {})})
     if cycles is not None:
         out.update({"procedure.cof_cycles": cycles, "procedure.wear_cycles": 0})
-        out.update(run_up_within(scenes.load(path), cycles))
+        out.update(run_up_within(scene, cycles))
     return out
 
 
