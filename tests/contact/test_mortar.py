@@ -123,6 +123,23 @@ def test_mortar_integrals_conserve_area_and_rigid_motion():
     assert row_d == pytest.approx(pairing.slave.area, rel=1e-12)
 
 
+def test_mortar_integrals_are_the_same_summed_dense_or_sparse(monkeypatch):
+    """Small interfaces sum the integrals in a dense array, large ones through scipy's COO
+    form (contact/mortar.py, ``_summed``): the same entries either way, to round-off, and the
+    same sparsity once round-off is dropped (a quadrilateral's own dual coefficients leave
+    D's off-diagonals as round-off)."""
+    import contact.mortar as mortar
+
+    pairing = _blocks((7, 7), (13, 11)).assembly.pairing
+    dense_sum = mortar_matrices(pairing.slave, pairing.master)
+    monkeypatch.setattr(mortar, "_DENSE_SUM", 0)
+    coo_sum = mortar_matrices(pairing.slave, pairing.master)
+    for dense, coo in zip(dense_sum[:2], coo_sum[:2]):
+        assert dense.nnz == coo.nnz
+        assert np.array_equal(dense.indptr, coo.indptr) and np.array_equal(dense.indices, coo.sorted_indices().indices)
+        assert np.abs((dense - coo).toarray()).max() <= 1e-13 * np.abs(coo.data).max()
+
+
 def test_hertz_on_non_matching_meshes_with_mortar():
     model = build(scenes.load(SCENE, {"bodies.plane.mesh.contact_size": 0.043}))
     assert model.assembly.pairing.method == "mortar"
