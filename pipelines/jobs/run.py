@@ -53,9 +53,11 @@ class ProgressBar:
         pass
 
     def cycle(self, summary):
+        # what slid in the cycle, and what sits at the friction limit (it need not move: in
+        # normal operation a third of the pads sits at the limit of μ₀ and sticks), of the area
         figures = summary.figures
-        self.bar.set_postfix(slip=f"{figures['slip_area_fraction']:.2f}",
-                             stick=f"{figures['stick_area_fraction']:.2f}", refresh=False)
+        self.bar.set_postfix(sliding=f"{figures['active_slip_area_fraction']:.2f}",
+                             at_limit=f"{figures['slip_area_fraction']:.2f}", refresh=False)
         self.bar.update(1)
 
     def close(self, reason: str | None = None, *, done: bool = False):
