@@ -76,7 +76,8 @@ class Structure:
 
 def _columns(matrix: sp.csr_matrix, columns: np.ndarray) -> sp.csr_matrix:
     """matrix[:, columns] for sorted ``columns``, by a map of the CSR entries (scipy's fancy
-    column indexing costs several times more on a small operator re-formed at every re-pairing)."""
+    column indexing and slicing cost several times more than the products on a small operator
+    re-formed at every re-pairing)."""
     position = np.full(matrix.shape[1], -1)
     position[columns] = np.arange(columns.size)
     new = position[matrix.indices]
@@ -130,19 +131,11 @@ class _BlockFactor:
         """operator·K⁻¹·operatorᵀ, one body block at a time (no dense global operator)."""
         result = np.zeros((operator.shape[0], operator.shape[0]))
         operator = operator.tocsr()
-        row_of_entry = np.repeat(np.arange(operator.shape[0]), np.diff(operator.indptr))
         for block, inverse in zip(self.blocks, self.inverses):
-            # a block is a run of consecutive eliminated DOFs: its columns are one range
-            # (selected on the CSR entries: scipy's column slicing costs more than the products
-            # for a small interface that re-pairs every few increments)
-            inside = (operator.indices >= block[0]) & (operator.indices <= block[-1])
-            counts = np.bincount(row_of_entry[inside], minlength=operator.shape[0])
-            touched = np.flatnonzero(counts)
+            part = _columns(operator, block)  # a block is a run of consecutive eliminated DOFs
+            touched = np.flatnonzero(np.diff(part.indptr))
             if touched.size == 0:
                 continue
-            part = sp.csr_matrix((operator.data[inside], operator.indices[inside] - block[0],
-                                  np.concatenate([[0], np.cumsum(counts)])),
-                                 shape=(operator.shape[0], block.size))
             if 2 * touched.size < operator.shape[0]:  # a body few rows touch: those rows only
                 rows = part[touched]
                 result[np.ix_(touched, touched)] += np.asarray(rows @ np.asarray(rows @ inverse).T)
