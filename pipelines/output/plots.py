@@ -36,10 +36,14 @@ FIELD_LABELS = {
     "ffdp": "fretting fatigue parameter FFDP = σ_t·τ·δ [MPa²·mm]",
 }
 
+#: the status of the cycle's last increment ("at the friction limit": |τ| = μ·p, which a point
+#: reaches with a tiny irreversible slip, and a stuck joint shows on much of its area), and
+#: what still slid over the cycle, the verdict's measure (:func:`contact.verdict.active_slip_area_fraction`)
 AREA_LABELS = {
-    "stick_area_fraction": "stick",
-    "slip_area_fraction": "slip",
-    "damaged_area_fraction": "slip at μ_max (damaged)",
+    "stick_area_fraction": "stick (below the friction limit)",
+    "slip_area_fraction": "at the friction limit",
+    "active_slip_area_fraction": "sliding in the cycle (verdict)",
+    "damaged_area_fraction": "sliding at μ_max (damaged)",
     "worn_area_fraction": "worn",
     "cof_evolved_area_fraction": "COF evolved",
 }

@@ -25,8 +25,8 @@ PACKAGES = ("fretwork", "numpy", "scipy", "scikit-fem", "exudyn", "h5py", "matpl
 KEY_FIGURES = (
     ("verdict", "verdict", None), ("stationary", "stationary", None),
     ("cycles_run", "simulated cycles", None), ("equivalent_cycles", "real cycles", None),
-    ("stick_area_fraction", "stick area", "%"), ("slip_area_fraction", "slip area", "%"),
-    ("damaged_area_fraction", "slip at μ_max area", "%"), ("active_slip_area_fraction", "still sliding", "%"),
+    ("stick_area_fraction", "stick area", "%"), ("slip_area_fraction", "at the friction limit", "%"),
+    ("damaged_area_fraction", "at μ_max (damaged) area", "%"), ("active_slip_area_fraction", "still sliding (verdict)", "%"),
     ("cof_evolved_area_fraction", "COF evolved area", "%"), ("min_stick_margin", "smallest stick margin", None),
     ("max_wear_depth_mm", "max wear depth [mm]", None), ("wear_volume_mm3", "wear volume [mm³]", None),
     ("dissipated_energy_mJ", "dissipated energy [mJ]", None),
