@@ -234,8 +234,12 @@ class SparseNewtonSolver:
         self._assembler = TangentAssembler(*space.tangent_operators(), space.structure.dim)
         pattern = self._assembler.matrix(np.zeros((space.structure.n_points, space.structure.dim,
                                                    space.structure.dim)))
-        self._upper = np.flatnonzero(np.repeat(np.arange(pattern.shape[0]), np.diff(pattern.indptr))
-                                     <= pattern.indices)
+        entry_rows = np.repeat(np.arange(pattern.shape[0]), np.diff(pattern.indptr))
+        # the upper triangle's entries of the pattern, and its CSR row pointers (the Cholesky
+        # preconditioner is given the upper triangle; the pattern never changes)
+        self._upper = np.flatnonzero(entry_rows <= pattern.indices)
+        self._upper_indptr = np.concatenate([[0], np.cumsum(np.bincount(entry_rows[self._upper],
+                                                                        minlength=pattern.shape[0]))])
         self.reference = reference
         self._factor = None
         self._stale = True
@@ -286,10 +290,8 @@ class SparseNewtonSolver:
             diagonal = np.zeros_like(blocks)
             diagonal[:, np.arange(dim), np.arange(dim)] = np.maximum(np.diagonal(blocks, axis1=1, axis2=2), 0.0)
             matrix = self._assembler.matrix(diagonal)
-            upper = sp.csr_matrix((matrix.data[self._upper], matrix.indices[self._upper],
-                                   np.concatenate([[0], np.cumsum(np.bincount(
-                                       np.repeat(np.arange(matrix.shape[0]), np.diff(matrix.indptr))[self._upper],
-                                       minlength=matrix.shape[0]))])), shape=matrix.shape)
+            upper = sp.csr_matrix((matrix.data[self._upper], matrix.indices[self._upper], self._upper_indptr),
+                                  shape=matrix.shape)
             if self._factor is None:
                 self._factor = _SparseLU(upper, self.settings.single_precision, mtype=2)
             self._factor.factorise(upper)
