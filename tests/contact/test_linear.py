@@ -62,6 +62,21 @@ def test_newton_correction_equals_the_dense_solve(flat, direct_below, opened):
     assert np.max(np.abs(got - expected)) <= 1e-8 * scale
 
 
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_compliance_on_closed_rows_is_w_gathered_and_rounded(flat, dtype):
+    """W on the working rows of a partly open interface is W's entries there (rounded to the
+    working precision, in the Fortran order the products read), whether it is gathered from
+    W or from its kept single-precision copy; with every row closed it is all of W."""
+    _, space = flat
+    solver = NewtonLinearSolver(space)
+    rows = np.flatnonzero(np.arange(space.n_rows) % 5 != 2)  # some rows of every kind left out
+    block = solver._closed_compliance(rows, dtype)
+    assert block.dtype == dtype and block.flags.f_contiguous
+    assert np.array_equal(block, space.W[rows][:, rows].astype(dtype))
+    whole = solver._closed_compliance(np.arange(space.n_rows), dtype)
+    assert np.array_equal(whole, space.W.astype(dtype))
+
+
 def _history_end(case, linear: KrylovSettings):
     """Pressure, shear and COF (MPa, MPa, -) at the end of the case's history, and the solver."""
     structure = assemble(case.bodies, case.slave, case.master, loads=case.loads, motions=case.motions).structure
