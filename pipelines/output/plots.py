@@ -43,7 +43,7 @@ AREA_LABELS = {
     "stick_area_fraction": "stick (below the friction limit)",
     "slip_area_fraction": "at the friction limit",
     "active_slip_area_fraction": "sliding in the cycle (verdict)",
-    "damaged_area_fraction": "sliding at μ_max (damaged)",
+    "damaged_area_fraction": "at the friction limit with μ = μ_max (damaged)",
     "worn_area_fraction": "worn",
     "cof_evolved_area_fraction": "COF evolved",
 }
