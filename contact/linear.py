@@ -16,7 +16,7 @@ iterations and increments: between them the closed set rarely changes and the ta
 changes little, so a few Krylov iterations (each one product with W and one triangular
 solve) replace an O(n³) factorisation. The factor is rebuilt when points close that it does
 not cover, or when the Krylov work lost to its age exceeds what the last rebuild cost. Up to
-16 factors are kept (as many as fit in 768 MB) and each solve takes the one formed at the
+16 factors are kept (as many as fit in 1.5 GB) and each solve takes the one formed at the
 tangent nearest its own: under a cyclic load that is the one of the same point of an
 earlier cycle, not the previous increment's. Work
 is counted in floating-point operations, not measured in seconds: a policy driven by the
@@ -80,7 +80,12 @@ class KrylovSettings:
         38 % fewer Krylov iterations and 60 % fewer factorisations with 16 than with one.
         With one kept, a rebuilt preconditioner replaces the only one and ages as fast as it:
         at 2.5 mm (4,800 rows, 92 MB a factor), over 20 COF and 10 wear cycles, 8 kept took
-        8,157 Krylov iterations and 42 rebuilds, one 11,595 and 83.
+        8,157 Krylov iterations and 42 rebuilds, one 11,595 and 83. The pool must hold one
+        factor per load step of the cycle (12 in the shipped scenes) or the least recently
+        used is always the one needed next. The loosening extreme at 2.5 mm, in its late wear
+        blocks with 8 kept, failed a quarter of its solves (each 40 iterations and a
+        rebuild) and took 13.0 s a block; with 16 kept, and a factor that fails kept too,
+        5.6 s, side by side. Hence 1.5 GB: 16 factors at 2.5 mm.
     """
 
     direct_below: int = 300
@@ -90,7 +95,7 @@ class KrylovSettings:
     max_iterations: int = 40
     single_precision: bool = True
     factors_kept: int = 16
-    factors_bytes: float = 768e6
+    factors_bytes: float = 1.5e9
 
 
 @dataclass
@@ -190,7 +195,9 @@ class NewtonLinearSolver:
         # tangents it is nearer to; here the new one will be nearer.
         self._stale = solution is not None and chosen.age.charge(iterations, self.settings.fresh_iterations)
         if solution is None:
-            self._pool.drop(chosen)
+            # The factor stays in the pool: it failed on this tangent, not on the one it was
+            # formed at. Under a cyclic load that is the same step of the next cycle, and a
+            # factor dropped here is missing there (see KrylovSettings.factors_kept).
             chosen = self._refactor(working, closed_blocks, W_cc, E_c)
             solution, more = self._krylov(matvec, chosen, r_kin[closed], r_ctl, tolerance)
             iterations += more
@@ -354,12 +361,6 @@ class _Pool:
         for row, kept in enumerate(self.factors):
             self._stack[row, kept.points] = kept.blocks
             self._covers[row, kept.points] = True
-
-    def drop(self, factor: _Factor) -> None:
-        """Forget ``factor`` (it failed)."""
-        keep = np.array([kept is not factor for kept in self.factors])
-        self.factors = [kept for kept in self.factors if kept is not factor]
-        self._stack, self._covers = self._stack[keep], self._covers[keep]
 
     def nearest(self, blocks: np.ndarray, closed_points: np.ndarray) -> _Factor | None:
         """The factor formed at the tangent nearest ``blocks`` (sum of squared differences of

@@ -148,6 +148,30 @@ def test_pool_chooses_the_preconditioner_of_the_nearest_tangent_that_covers_the_
     assert third in pool.factors and twins[0] not in pool.factors
 
 
+def test_a_preconditioner_that_fails_on_one_tangent_is_kept_for_its_own(flat):
+    """GMRES that does not converge with the nearest factor rebuilds one at the current
+    tangent, and the factor that failed stays for the tangents it is near (under a cyclic
+    load, the same step of the next cycle): solving at its own tangent again takes it, in
+    one Krylov iteration, and both corrections equal the dense solve."""
+    case, space = flat
+    first, second = _tangent(case, space, 0), _tangent(case, space, 7)
+    second[7:] *= 3.0  # far from the first: one Krylov iteration cannot bridge it
+    rng = np.random.default_rng(2)
+    r_kin, r_ctl = rng.normal(0.0, 1e-4, space.n_rows), rng.normal(0.0, 10.0, space.n_control)
+    solver = NewtonLinearSolver(space, KrylovSettings(direct_below=0, relative_tolerance=1e-12, max_iterations=1,
+                                                      single_precision=False))
+    for blocks in (first, second):
+        expected = np.linalg.solve(_full_system(space, blocks), -np.concatenate([r_kin, r_ctl]))
+        got = np.concatenate(solver.solve(blocks, r_kin, r_ctl))
+        assert np.max(np.abs(got - expected)) <= 1e-8 * np.max(np.abs(expected))
+    assert solver.counters.factorisations == 2  # the second solve failed and rebuilt
+    kept = solver._pool.factors
+    assert len(kept) == 2 and np.array_equal(kept[0].blocks, first)
+    iterations = solver.counters.krylov_iterations
+    solver.solve(first, r_kin, r_ctl)
+    assert solver.counters.factorisations == 2 and solver.counters.krylov_iterations == iterations + 1
+
+
 def test_pool_keeps_as_many_preconditioners_as_fit_in_its_memory(flat):
     """factors_bytes bounds the preconditioners' memory: as many as fit are kept (at most
     factors_kept, at least one), each a (rows + controls)² array of 4 (single) or 8 bytes."""
