@@ -71,9 +71,10 @@ def saved_fields(results: h5py.File) -> dict:
     """What ``--fields`` keeps of a results file: the final pressure, shear and COF; the same
     fields at the end of the first phase (``first_phase_*``, when a field snapshot was written
     there and another phase followed); and the clamp force of every cycle (``clamp_force_N``,
-    N) with the real cycles it stands at (``equivalent_cycles``). A long loosening run is compared on the first two and judged on the last: explicit
-    wear over thousands of blocks amplifies where two Newton iterations stop inside their
-    tolerance, so its final fields differ at the edge points whatever the linear solver."""
+    N) with the real cycles it stands at (``equivalent_cycles``). A long loosening run is
+    compared on the first-phase fields and judged on the clamp force: explicit wear over
+    thousands of blocks amplifies where two Newton iterations stop inside their tolerance, so
+    its final fields differ at the edge points whatever the linear solver."""
     out = {name: results["final"][name][()] for name in FIELDS}
     cycles = results["cycles"]
     out["clamp_force_N"] = cycles["figures"]["clamp_force_N"][()]
@@ -97,7 +98,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="auto: the shipped choice; dense: exact LU of the dense system every iteration")
     parser.add_argument("--solver", choices=("auto", "dense", "sparse"), default="auto",
                         help="the contact path ([contact] solver): auto is the shipped choice")
-    parser.add_argument("--fields", type=Path, default=None, help="write the final fields (and more: saved_fields) here (.npz)")
+    parser.add_argument("--fields", type=Path, default=None,
+                        help="write the final fields (and more: saved_fields) here (.npz)")
     args = parser.parse_args(argv)
     pin_process()  # as the command line does
     path = ROOT / "examples" / f"{args.scene}.toml"

@@ -52,6 +52,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.bench.scene_run import FIELDS  # the fields scene_run --fields saves
+
 ROOT = Path(__file__).resolve().parents[2]
 MEMORY_GB = float(os.environ.get("FRETWORK_BENCH_MEMORY_GB", "8"))
 #: dense set-up memory of flat-on-flat, measured at 3,600 points (issue 14; graded blocks:
@@ -94,15 +96,12 @@ def _scene(scene: str, size, solver: str, folder: Path) -> dict:
             "wall_s": time.perf_counter() - started, "peak_mb": out["peak_rss_mb"], "fields": fields}
 
 
-FIELDS = ("pressure", "shear", "cof")
-
-
 def _difference(a: Path, b: Path, prefix: str = "") -> float:
     """Largest difference of the pressure, shear and COF fields (final, or with ``prefix``
     "first_phase_" at the end of the COF phase), relative to ``b``'s largest of each."""
     with np.load(a) as x, np.load(b) as y:
-        return max(float(np.max(np.abs(x[prefix + k] - y[prefix + k]))) / max(float(np.max(np.abs(y[prefix + k]))), 1e-300)
-                   for k in FIELDS)
+        return max(float(np.max(np.abs(x[prefix + k] - y[prefix + k])))
+                   / max(float(np.max(np.abs(y[prefix + k]))), 1e-300) for k in FIELDS)
 
 
 def _clamp_force_difference(a: Path, b: Path) -> float:
