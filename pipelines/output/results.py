@@ -36,11 +36,14 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
 
 The file is written as ``results.h5.part`` and renamed when the run completes, so a
 ``results.h5`` is never half-written. Rows are kept in memory and written in blocks: at every
-checkpoint, at least every ``flush_seconds`` of wall time (checked at the end of a cycle),
-when a run fails or is interrupted, and at the end; the part file can then be read after an
-interruption up to its last block. (Written row by row, the file cost 30-80 ms per cycle,
-1.5-2 ms per increment of a 12- or 40-increment cycle: as much as the contact solve of a
-small interface. When a block is written changes no value in it.)
+checkpoint, at the end of every ``flush_cycles``-th cycle since the last block, when a run fails
+or is interrupted, and at the end; the part file can then be read after an interruption up to
+its last block. (Written row by row, the file cost 30-80 ms per cycle, 1.5-2 ms per increment
+of a 12- or 40-increment cycle: as much as the contact solve of a small interface.) When a block
+is written changes no value in it, but it changes where HDF5 places the chunks, so the rule
+counts cycles and never reads the clock: two runs of one scene give the same bytes however long
+they take. (Every 10 s of wall time, as it was, gave longer runs equal datasets in different
+bytes.)
 """
 
 from __future__ import annotations
@@ -48,7 +51,6 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import time
 from pathlib import Path
 
 import h5py
@@ -124,7 +126,7 @@ class ResultsWriter(Observer):
 
     def __init__(self, path: Path, model, space, *, record_every: int = 1, progress=None,
                  track_energy: bool = True, resume: bool = False, field_output=None,
-                 flush_seconds: float = 10.0):
+                 flush_cycles: int = 25):
         self.final_path = Path(path)
         self.part_path = self.final_path.with_suffix(".h5.part")
         self.checkpoint_path = self.final_path.with_name("checkpoint.h5")
@@ -133,10 +135,10 @@ class ResultsWriter(Observer):
         self.progress = progress
         self.meter = EnergyMeter(space, model.law) if track_energy else None
         self.labels = model.assembly.structure.labels
-        self.flush_seconds = flush_seconds
+        self.flush_cycles = flush_cycles
+        self._unflushed_cycles = 0
         self._rows: dict[str, dict[str, list]] = {"increments": {}, "cycles": {}}
         self._units: dict[str, str] = {}
-        self._flushed_at = time.monotonic()
         self.snapshot = None
         self.area = space.structure.area
         self.output_increments = output_increments(field_output, model.procedure.increments_per_cycle)
@@ -213,7 +215,7 @@ class ResultsWriter(Observer):
         self._rows = {"increments": {}, "cycles": {}}
         self._flush_increment_fields()
         self.file.flush()
-        self._flushed_at = time.monotonic()
+        self._unflushed_cycles = 0
 
     def _label_columns(self) -> None:
         """Name the columns of the per-increment tables (bolts, control DOFs and their units) as
@@ -296,7 +298,8 @@ class ResultsWriter(Observer):
             for name, value in self._fields(summary).items():
                 # copied: a field may be a view of state the run goes on to change
                 self._row(f"fields/{name}", np.array(value), FIELD_UNITS[name], "cycles")
-        if time.monotonic() - self._flushed_at >= self.flush_seconds:
+        self._unflushed_cycles += 1
+        if self._unflushed_cycles >= self.flush_cycles:
             self._flush()
         if self.progress is not None:
             self.progress.cycle(summary)

@@ -100,3 +100,19 @@ wear_cycles = 4
     _run(scene, tmp_path / "one", threads=1)
     _run(scene, tmp_path / "two", threads=2)
     assert_bit_equal(tmp_path / "one" / "results.h5", tmp_path / "two" / "results.h5")
+
+
+def test_the_results_file_does_not_depend_on_how_long_the_run_took(scene, tmp_path, monkeypatch):
+    """When rows are written changes where HDF5 puts the chunks, so it must not follow the clock.
+    A run on a machine so slow that every call to the clock is an hour later gives the same bytes.
+    (The writer once flushed every 10 s of wall time: runs of more than 10 s differed in bytes.)"""
+    import time
+
+    from pipelines import scene as scenes
+    from pipelines.jobs.run import run_scene
+
+    run_scene(scenes.load(scene), tmp_path / "quick", progress=False, plots=False)
+    hours = iter(range(10**9))
+    monkeypatch.setattr(time, "monotonic", lambda: 3600.0 * next(hours))
+    run_scene(scenes.load(scene), tmp_path / "slow", progress=False, plots=False)
+    assert_bit_equal(tmp_path / "quick" / "results.h5", tmp_path / "slow" / "results.h5")
