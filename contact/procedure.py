@@ -203,6 +203,7 @@ class Snapshot:
     history: the last cycles (enough for the loosening window; only the last one keeps its
     per-point fields). locked_elongation: ε_lock of the bolts (mm), or None.
     predictors: the solver's cyclic predictors (:meth:`contact.solver.ContactSolver.predictor_memory`).
+    linear: its linear solver's kept preconditioners (:meth:`contact.solver.ContactSolver.linear_memory`).
     """
 
     cycle_number: int
@@ -220,6 +221,7 @@ class Snapshot:
     jump: float = 1.0
     loosening_at: float | None = None
     predictors: dict = field(default_factory=dict)
+    linear: dict = field(default_factory=dict)
 
 
 class _Run:
@@ -300,6 +302,7 @@ class _Run:
         if self.bolts is not None:
             self.lock(snapshot.locked_elongation)
         self.solver.recall_predictors(snapshot.predictors)
+        self.solver.recall_linear(snapshot.linear)
 
     def cycle(self, phase: str, effects: Effects) -> CycleSummary:
         """One load cycle of ``increments_per_cycle`` increments and its summary."""
@@ -375,7 +378,7 @@ class _Run:
                 if self.loosening_at is None:
                     self.loosening_at = self.equivalent
             if checkpoint_every and self.cycle_number % checkpoint_every == 0:
-                self.solver.forget_cached_factorisations()
+                self.solver.at_checkpoint()
                 if checkpoint is not None and not (self.stationary or loosening or count + 1 == n_cycles):
                     checkpoint(self.snapshot(phase_index, count + 1))
             if self.stationary or loosening:
@@ -409,7 +412,7 @@ class _Run:
                         self.nominal_area, self.initial_clamp,
                         None if self.bolts is None else self.bolts.locked_elongation,
                         self.cof_initial, self.state, self.equilibrium, list(self.history), self.jump,
-                        self.loosening_at, self.solver.predictor_memory())
+                        self.loosening_at, self.solver.predictor_memory(), self.solver.linear_memory())
 
     def result(self, stopped_early: bool) -> RunResult:
         if not self.history:

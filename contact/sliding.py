@@ -164,8 +164,17 @@ class SlidingSolver:
         self.solver.forget_cached_factorisations()
         self.solver.recall_predictors({})
 
+    def at_checkpoint(self) -> None:
+        self.forget_cached_factorisations()
+
     def predictor_memory(self) -> dict:
         return {}
+
+    def linear_memory(self) -> dict:
+        return {}
+
+    def recall_linear(self, memory: dict) -> None:
+        pass
 
     def recall_predictors(self, memory: dict) -> None:
         self.solver.recall_predictors(memory)

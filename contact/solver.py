@@ -180,6 +180,27 @@ class ContactSolver:
         self.linear = self.space.linear_solver(self.linear.settings)
         self._last_compliance = None
 
+    def at_checkpoint(self) -> None:
+        """A checkpoint boundary: go on from a state a resumed run can take up again. A linear
+        solver that can store what it keeps (:meth:`linear_memory`: the dense Krylov path's
+        preconditioners, as the tangents they were formed at) keeps it; one that cannot drops
+        its factorisations, as a resumed run starts without them."""
+        if not hasattr(self.linear, "memory"):
+            self.linear = self.space.linear_solver(self.linear.settings)
+        self._last_compliance = None
+
+    def linear_memory(self) -> dict[str, np.ndarray]:
+        """What the linear solver keeps across increments, as arrays for a checkpoint ({} if
+        it cannot store it)."""
+        return self.linear.memory() if hasattr(self.linear, "memory") else {}
+
+    def recall_linear(self, memory: dict[str, np.ndarray]) -> None:
+        """Take up a :meth:`linear_memory` (a resumed run). The factors are formed again with
+        as many BLAS threads as an increment forms them with: their digits depend on it."""
+        if memory:
+            with blas_threads(self.settings.blas_threads):
+                self.linear.recall(memory)
+
     def predictor_memory(self) -> dict[str, np.ndarray]:
         """The cyclic predictors' memory as arrays, for a checkpoint (:meth:`recall_predictors`).
 

@@ -57,10 +57,12 @@ def write_snapshot(group: h5py.Group, snapshot: Snapshot, meter) -> None:
     last = snapshot.history[-1]
     for name in SUMMARY_ARRAYS:
         history.create_dataset(name, data=getattr(last, name))
-    if snapshot.predictors:
-        predictors = group.create_group("predictors")
-        for name, value in snapshot.predictors.items():
-            predictors.create_dataset(name, data=value)
+    for name in ("predictors", "linear"):
+        memory = getattr(snapshot, name)
+        if memory:
+            stored = group.create_group(name)
+            for key, value in memory.items():
+                stored.create_dataset(key, data=value)
     if meter is not None:
         energy = group.create_group("energy")
         energy.attrs["sums"] = json.dumps({"external_work": meter.external_work,
@@ -90,10 +92,11 @@ def read_snapshot(group: h5py.Group, meter) -> Snapshot:
         for name, value in json.loads(energy.attrs["sums"]).items():
             setattr(meter, name, value)
         meter.recall({name: energy[name][()] for name in energy})
-    predictors = {name: value[()] for name, value in group["predictors"].items()} if "predictors" in group else {}
+    memories = {name: {key: value[()] for key, value in group[name].items()} if name in group else {}
+                for name in ("predictors", "linear")}
     return Snapshot(cof_initial=group["cof_initial"][()],
                     locked_elongation=group["locked_elongation"][()] if "locked_elongation" in group else None,
-                    state=state, equilibrium=equilibrium, history=history, predictors=predictors, **scalars)
+                    state=state, equilibrium=equilibrium, history=history, **memories, **scalars)
 
 
 __all__ = ["write_snapshot", "read_snapshot"]

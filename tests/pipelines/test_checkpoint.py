@@ -7,8 +7,11 @@ import subprocess
 import sys
 import time
 
+from pathlib import Path
+
 import h5py
 import numpy as np
+import pytest
 
 from pipelines.cli.main import main
 
@@ -61,3 +64,49 @@ def test_kill_and_resume_equals_uninterrupted_run(coarse_cylinder, tmp_path, cap
         floating = np.asarray(value).dtype.kind == "f"
         assert np.array_equal(value, resumed[name], equal_nan=floating), name
     assert main(["run", str(scene), "--out", str(interrupted), "--quiet", "--resume"]) == 2
+
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def test_a_resumed_counterweight_takes_up_its_kept_preconditioners(tmp_path, monkeypatch):
+    """The dense Krylov path (the counterweight at 10 mm: 158 points) keeps its
+    preconditioners through a checkpoint, and a run stopped there forms them again from the
+    checkpoint: it ends bit for bit as the uninterrupted run, in the COF and the wear phase."""
+    from pipelines import scene as scenes
+    from pipelines.jobs.run import run_scene
+    from pipelines.output.results import ResultsWriter
+
+    scene = tmp_path / "cw.toml"
+    scene.write_text(f"""[scene]
+base = "{EXAMPLES / 'counterweight_extreme.toml'}"
+name = "cw_resumed"
+[procedure]
+cof_cycles = 5
+vibration_run_up = 2
+wear_cycles = 5
+checkpoint_every = 4
+""")
+    reference = run_scene(scenes.load(scene), tmp_path / "reference", progress=False, plots=False)
+    assert "GMRES" in reference.summary["linear_solver"]
+    written = ResultsWriter.checkpoint
+    for stop in (4, 8):  # in the COF phase, in the wear phase
+        monkeypatch.setattr(ResultsWriter, "checkpoint", lambda writer, snapshot, stop=stop: (
+            written(writer, snapshot), _interrupt(snapshot.cycle_number == stop)))
+        folder = tmp_path / f"stopped_at_{stop}"
+        with pytest.raises(KeyboardInterrupt):
+            run_scene(scenes.load(scene), folder, progress=False, plots=False)
+        monkeypatch.setattr(ResultsWriter, "checkpoint", written)
+        with h5py.File(folder / "checkpoint.h5", "r") as file:
+            assert file["checkpoint/linear/counts"].size > 1  # more than one preconditioner kept
+        run_scene(scenes.load(scene), folder, progress=False, plots=False, resume=True)
+        expected, resumed = _datasets(reference.results_path), _datasets(folder / "results.h5")
+        assert expected.keys() == resumed.keys()
+        for name, value in expected.items():
+            floating = np.asarray(value).dtype.kind == "f"
+            assert np.array_equal(value, resumed[name], equal_nan=floating), f"stopped at {stop}: {name}"
+
+
+def _interrupt(now: bool) -> None:
+    if now:
+        raise KeyboardInterrupt
