@@ -325,9 +325,9 @@ class NewtonLinearSolver:
         """The kept preconditioners as the tangents they were formed at, for a checkpoint
         (:meth:`recall`): per factor its points (``points``, ``counts`` of each), tangent
         blocks (N/mm), lost work (flops) and last use, and the pool's clock, whether the next
-        solve rebuilds (``stale``) and the points the last solve worked on. About 100 kB a
-        factor at 1,500 points, where a factor itself is 90 MB: a resumed run forms the
-        factors again from W, to the same bits, instead of reading them."""
+        solve rebuilds (``stale``) and the points the last solve worked on (empty for none).
+        About 100 kB a factor at 1,500 points, where a factor itself is 90 MB: a resumed run
+        forms the factors again from W, to the same bits, instead of reading them."""
         factors = self._pool.factors
         dim = self.space.structure.dim
         return {"points": np.concatenate([f.points for f in factors]) if factors else np.zeros(0, int),
@@ -337,8 +337,7 @@ class NewtonLinearSolver:
                 "lost_work": np.array([f.age.lost_work for f in factors], dtype=float),
                 "last_used": np.array([f.last_used for f in factors], dtype=int),
                 "clock": np.array(self._pool._clock), "stale": np.array(self._stale),
-                "last_points": np.zeros(0, int) if self._last_points is None else self._last_points,
-                "has_last_points": np.array(self._last_points is not None)}
+                "last_points": np.zeros(0, int) if self._last_points is None else self._last_points}
 
     def recall(self, memory: dict[str, np.ndarray]) -> None:
         """Take up a :meth:`memory` (a resumed run): form its factors again, in its order,
@@ -356,9 +355,8 @@ class NewtonLinearSolver:
             factors.append(factor)
         self._pool.take(factors, int(memory["clock"]), self.space.structure.n_points)
         self._stale = bool(memory["stale"])
-        self._last_points = memory["last_points"].copy() if bool(memory["has_last_points"]) else None
-        if factors:
-            self._control_scale = factors[-1].control_scale
+        # a solve on the Krylov path works on some points, so empty stands for none
+        self._last_points = memory["last_points"].copy() if memory["last_points"].size else None
 
 
 @dataclass(eq=False)

@@ -174,9 +174,8 @@ class ContactSolver:
                                                                 @ self.rigid_modes) @ self.rigid_modes.T
 
     def forget_cached_factorisations(self) -> None:
-        """Drop the factorisations the linear solver keeps across increments (a checkpoint
-        boundary: a resumed run then starts from the same solver state as an uninterrupted one).
-        The cyclic predictors stay: a checkpoint stores them (:meth:`predictor_memory`)."""
+        """Drop the factorisations the linear solver keeps across increments (at a checkpoint,
+        those it cannot store: :meth:`at_checkpoint`). The cyclic predictors stay."""
         self.linear = self.space.linear_solver(self.linear.settings)
         self._last_compliance = None
 
@@ -185,9 +184,10 @@ class ContactSolver:
         solver that can store what it keeps (:meth:`linear_memory`: the dense Krylov path's
         preconditioners, as the tangents they were formed at) keeps it; one that cannot drops
         its factorisations, as a resumed run starts without them."""
-        if not hasattr(self.linear, "memory"):
-            self.linear = self.space.linear_solver(self.linear.settings)
-        self._last_compliance = None
+        if hasattr(self.linear, "memory"):
+            self._last_compliance = None
+        else:
+            self.forget_cached_factorisations()
 
     def linear_memory(self) -> dict[str, np.ndarray]:
         """What the linear solver keeps across increments, as arrays for a checkpoint ({} if

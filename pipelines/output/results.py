@@ -136,7 +136,6 @@ class ResultsWriter(Observer):
         self.meter = EnergyMeter(space, model.law) if track_energy else None
         self.labels = model.assembly.structure.labels
         self.flush_cycles = flush_cycles
-        self._unflushed_cycles = 0
         self._rows: dict[str, dict[str, list]] = {"increments": {}, "cycles": {}}
         self._units: dict[str, str] = {}
         self.snapshot = None
@@ -215,7 +214,6 @@ class ResultsWriter(Observer):
         self._rows = {"increments": {}, "cycles": {}}
         self._flush_increment_fields()
         self.file.flush()
-        self._unflushed_cycles = 0
 
     def _label_columns(self) -> None:
         """Name the columns of the per-increment tables (bolts, control DOFs and their units) as
@@ -298,8 +296,7 @@ class ResultsWriter(Observer):
             for name, value in self._fields(summary).items():
                 # copied: a field may be a view of state the run goes on to change
                 self._row(f"fields/{name}", np.array(value), FIELD_UNITS[name], "cycles")
-        self._unflushed_cycles += 1
-        if self._unflushed_cycles >= self.flush_cycles:
+        if len(self._rows["cycles"]["cycle"]) >= self.flush_cycles:  # cycles kept since the last block
             self._flush()
         if self.progress is not None:
             self.progress.cycle(summary)
