@@ -275,7 +275,8 @@ def cmd_convergence(args) -> int:
     out = Path(args.out)
     study = convergence_study(args.scene, sizes, out, cache_dir=_cache(args), limit_range_mm=limit_range,
                               tolerance_mm=1e-3 * args.tolerance, grid=args.grid, scheduler=args.scheduler,
-                              workers=args.workers, progress=not args.quiet)
+                              workers=args.workers, progress=not args.quiet,
+                              stop_at_loosening=args.stop_at_loosening)
     study["plot"] = str(plot_convergence(study, out / "convergence.png"))
     (out / "convergence.json").write_text(_json(study))
     if args.json:
@@ -298,6 +299,11 @@ def cmd_convergence(args) -> int:
             print(f"{level['size_mm']:>8g} {'':>7} {'':>10} {_percent(f['stick_area_fraction']):>8} "
                   f"{_percent(f['active_slip_area_fraction']):>9} {_percent(f['worn_area_fraction']):>7} "
                   f"{1e3 * (f['max_wear_depth_mm'] or 0.0):>11.2f} {_percent(f['clamp_force_loss_fraction']):>12}")
+    for level in sorted(study["levels"], key=lambda level: -level["size_mm"]):
+        evident = level["figures"].get("loosening_evident_at_cycles")
+        if evident is not None:
+            print(f"{level['size_mm']:>8g} mm: loosening evident after {evident:.4g} real cycles"
+                  + (" (the run stopped there)" if study["stop_at_loosening"] else ""))
     converged = study["converged_size_mm"]
     print("converged at " + (f"{converged:g} mm (its verdict equals the next finer level's)" if converged else
                              "no size: the verdict changes down to the finest level run"))
@@ -440,6 +446,10 @@ def _add_study_parsers(sub) -> None:
     convergence.add_argument("scene")
     convergence.add_argument("--sizes", required=True, metavar="S1,S2,...", help="element sizes, mm (e.g. 10,5,2.5)")
     convergence.add_argument("--amplitude", metavar="LOW:HIGH", help="also the amplitude limit on this range, µm")
+    convergence.add_argument("--stop-at-loosening", action="store_true",
+                             help="end every run once loosening is evident, whatever the scene's "
+                                  "procedure.stop_at_loosening says (a verdict check of a scene that runs on to its "
+                                  "life horizon; the figures then stand for the shortest run)")
     _add_scan_arguments(convergence, "results/convergence")
     convergence.set_defaults(func=cmd_convergence)
 

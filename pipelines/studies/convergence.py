@@ -2,7 +2,10 @@
 
 Each level runs the whole scene with every body mesh's ``contact_size`` set to one size (mm):
 verdict, stick / sliding / worn areas, maximum wear depth, clamp-force loss, minimum stick
-margin and, when asked, the wing-amplitude limit. Where three or more levels halve the size
+margin, the real cycles after which loosening was evident (a loosening joint's design figure)
+and, when asked, the wing-amplitude limit. With ``stop_at_loosening`` every level ends once its
+loosening is evident, whatever the scene says: a verdict check of a scene that runs on to its
+life horizon (the extreme counterweight) then costs the run-up to the verdict, not the horizon. Where three or more levels halve the size
 and a figure converges monotonically, Richardson extrapolation estimates its limit h → 0 and
 the observed order. A scene is converged at a size when its verdict equals that of the next
 finer level and its limit is within ``limit_tolerance`` of the finest level's.
@@ -23,7 +26,7 @@ from reduction.errors import InputError
 
 FIGURES = ("stick_area_fraction", "active_slip_area_fraction", "cof_evolved_area_fraction",
            "worn_area_fraction", "max_wear_depth_mm", "clamp_force_loss_fraction", "min_stick_margin",
-           "equivalent_cycles")
+           "equivalent_cycles", "loosening_evident_at_cycles")
 
 
 @dataclass
@@ -106,8 +109,10 @@ def extrapolations(levels: list[Level]) -> dict:
 
 
 def run_level(scene_path: str, size_mm: float, out_dir: str, cache_dir: str | None,
-              limit_range_mm: tuple | None = None, tolerance_mm: float = 0.01, grid: int = 7) -> Level:
-    """One level of the study: the scene at ``size_mm``, and its amplitude limit when asked."""
+              limit_range_mm: tuple | None = None, tolerance_mm: float = 0.01, grid: int = 7,
+              stop_at_loosening: bool = False) -> Level:
+    """One level of the study: the scene at ``size_mm``, and its amplitude limit when asked;
+    ``stop_at_loosening``: the level's runs end once loosening is evident."""
     import time
 
     from pipelines import scene as scenes
@@ -116,6 +121,8 @@ def run_level(scene_path: str, size_mm: float, out_dir: str, cache_dir: str | No
 
     base = scenes.load(scene_path)
     overrides = size_overrides(base.data, size_mm)
+    if stop_at_loosening:
+        overrides["procedure.stop_at_loosening"] = True
     clock = time.perf_counter()
     outcome = run_scene(scenes.load(scene_path, overrides), Path(out_dir) / f"size_{size_mm:g}mm",
                         progress=False, plots=False, cache=StageCache(cache_dir))
@@ -137,15 +144,17 @@ def run_level(scene_path: str, size_mm: float, out_dir: str, cache_dir: str | No
 
 def convergence_study(scene_path, sizes_mm, out_dir, *, cache_dir=None, limit_range_mm=None,
                       tolerance_mm: float = 0.01, grid: int = 7, scheduler=None, workers=None,
-                      progress: bool = True) -> dict:
+                      progress: bool = True, stop_at_loosening: bool = False) -> dict:
     """The scene at every size (levels run side by side as cases), with Richardson estimates
-    and the converged size; a dict ready for JSON."""
+    and the converged size; a dict ready for JSON. stop_at_loosening: every run ends once its
+    loosening is evident (see :func:`run_level`)."""
     from pipelines.parallel import map_cases
 
     sizes = sorted({float(s) for s in sizes_mm}, reverse=True)
     cases = [(size, {"scene_path": str(scene_path), "size_mm": size, "out_dir": str(out_dir),
                      "cache_dir": None if cache_dir is None else str(cache_dir),
-                     "limit_range_mm": limit_range_mm, "tolerance_mm": tolerance_mm, "grid": grid})
+                     "limit_range_mm": limit_range_mm, "tolerance_mm": tolerance_mm, "grid": grid,
+                     "stop_at_loosening": stop_at_loosening})
              for size in sizes]
     outcomes = map_cases(run_level, cases, scheduler=scheduler, workers=workers, label="convergence",
                          progress=progress)
@@ -156,14 +165,15 @@ def convergence_study(scene_path, sizes_mm, out_dir, *, cache_dir=None, limit_ra
     horizon = common_horizon(levels)
     return {"scene": str(scene_path), "levels": [asdict(level) for level in levels],
             "extrapolated": extrapolations(levels), "converged_size_mm": converged_size(levels),
-            "verdicts_agree": len({level.verdict for level in levels}) == 1, "common_cycles": horizon}
+            "verdicts_agree": len({level.verdict for level in levels}) == 1, "common_cycles": horizon,
+            "stop_at_loosening": stop_at_loosening}
 
 
 def figures_at_cycles(results_path, cycles: float) -> dict:
     """The figures (:data:`FIGURES`) of a run's last cycle at or before ``cycles`` real cycles,
     from its results.h5; a run that shook down earlier keeps its last figures (a stuck joint
     stays as it is). The clamp-force loss is relative to the clamp force the run's own loss
-    refers to."""
+    refers to; loosening counts as evident there if the run found it so by then (None if not)."""
     with h5py.File(results_path, "r") as results:
         final = json.loads(results["summary"].attrs["figures"])
         table = results["cycles"]
@@ -172,6 +182,8 @@ def figures_at_cycles(results_path, cycles: float) -> dict:
         stored = {name: table["figures"][name][()] for name in table["figures"]}
     out = {name: float(stored[name][row]) if name in stored else final.get(name) for name in FIGURES}
     out["equivalent_cycles"] = float(real[row])
+    evident = final.get("loosening_evident_at_cycles")
+    out["loosening_evident_at_cycles"] = evident if evident is not None and evident <= real[row] else None
     loss = final.get("clamp_force_loss_fraction")
     clamp = stored.get("clamp_force_N")
     if loss is not None and clamp is not None and loss < 1.0:

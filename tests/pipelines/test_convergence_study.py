@@ -133,3 +133,59 @@ def test_levels_are_compared_at_equal_running_time(tmp_path):
     together = [Level(10.0, "damage", {"equivalent_cycles": 2e6}, extra={"results": fine}),
                 Level(5.0, "damage", {"equivalent_cycles": 2e6}, extra={"results": fine})]
     assert common_horizon(together) is None and "at_common_cycles" not in together[0].extra
+
+
+def _double_beam_running_on(tmp_path, wear_cycles: int):
+    """The high-slip double beam (it loosens; 8 increments per cycle, as the double-beam tests
+    run it) told to run on past evident loosening to ``wear_cycles`` wear blocks."""
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[2] / "examples" / "double_beam_high_slip.toml"
+    scene = tmp_path / f"runs_on_{wear_cycles}.toml"
+    scene.write_text(f'[scene]\nbase = "{example}"\nname = "runs_on"\n\n'
+                     f"[procedure]\nstop_at_loosening = false\nincrements_per_cycle = 8\n"
+                     f"wear_cycles = {wear_cycles}\n")
+    return scene
+
+
+def test_a_verdict_check_stops_each_level_once_loosening_is_evident(tmp_path):
+    """stop_at_loosening overrides a scene that runs on to its horizon: the level ends at the
+    block where loosening became evident, with the verdict and that block's real cycles of the
+    run that went on (the same increments up to there), a fraction of its cycles."""
+    from pipelines.studies.convergence import convergence_study, run_level
+
+    whole = run_level(str(_double_beam_running_on(tmp_path, 40)), 2.5, str(tmp_path / "whole"), None)
+    assert whole.verdict == "loosening"
+    evident = whole.figures["loosening_evident_at_cycles"]
+    assert evident is not None and evident < 0.5 * whole.figures["equivalent_cycles"]
+
+    study = convergence_study(_double_beam_running_on(tmp_path, 300), [2.5], tmp_path / "study", workers=0,
+                              progress=False, stop_at_loosening=True)
+    level, = study["levels"]
+    assert study["stop_at_loosening"] and level["verdict"] == "loosening"
+    assert level["figures"]["loosening_evident_at_cycles"] == evident  # bit for bit: the same increments
+    assert level["figures"]["equivalent_cycles"] == evident  # and no further
+
+
+def test_the_study_command_passes_on_stop_at_loosening(coarse_cylinder, tmp_path, monkeypatch, capsys):
+    """--stop-at-loosening reaches the study, and each level's evident loosening is printed."""
+    from pipelines.cli.main import main
+    from pipelines.studies import convergence
+
+    asked = {}
+
+    def study(scene, sizes, out, **options):
+        asked.update(options)
+        figures = dict.fromkeys(convergence.FIGURES, 0.0) | {"min_stick_margin": None,
+                                                             "loosening_evident_at_cycles": 1.5e6}
+        levels = [{"size_mm": size, "points": 10, "verdict": "loosening", "figures": figures, "limit_mm": None,
+                   "extra": {}} for size in sizes]
+        return {"scene": str(scene), "levels": levels, "extrapolated": {}, "converged_size_mm": 10.0,
+                "verdicts_agree": True, "common_cycles": None, "stop_at_loosening": options["stop_at_loosening"]}
+
+    monkeypatch.setattr(convergence, "convergence_study", study)
+    monkeypatch.setattr(convergence, "plot_convergence", lambda study, path: path)
+    assert main(["study", "convergence", str(coarse_cylinder), "--sizes", "10,5", "--stop-at-loosening",
+                 "--out", str(tmp_path)]) == 0
+    assert asked["stop_at_loosening"] is True
+    assert "5 mm: loosening evident after 1.5e+06 real cycles (the run stopped there)" in capsys.readouterr().out
