@@ -265,7 +265,7 @@ def _sizes(text: str) -> list[float]:
 def cmd_convergence(args) -> int:
     """`fretwork study convergence`: a table per size, the converged size, Richardson estimates."""
     from pipelines.jobs.limit import coupled_scene, parse_range_um
-    from pipelines.studies.convergence import convergence_study, plot_convergence
+    from pipelines.studies.convergence import convergence_study, plot_convergence, plot_histories
 
     sizes = _sizes(args.sizes)
     limit_range = None
@@ -278,6 +278,8 @@ def cmd_convergence(args) -> int:
                               workers=args.workers, progress=not args.quiet,
                               stop_at_loosening=args.stop_at_loosening)
     study["plot"] = str(plot_convergence(study, out / "convergence.png"))
+    histories = plot_histories(study, out / "convergence_cycles.png")
+    study["history_plot"] = None if histories is None else str(histories)
     (out / "convergence.json").write_text(_json(study))
     if args.json:
         print(_json(study))
@@ -309,7 +311,7 @@ def cmd_convergence(args) -> int:
                              "no size: the verdict changes down to the finest level run"))
     for name, found in ((n, f) for n, f in study["extrapolated"].items() if math.isfinite(f["order"])):
         print(f"  {name}: Richardson estimate {found['estimate']:.4g} (observed order {found['order']:.2f})")
-    print(f"  plot: {study['plot']}")
+    print(f"  plot: {study['plot']}" + (f", over the run: {study['history_plot']}" if study["history_plot"] else ""))
     return 0
 
 

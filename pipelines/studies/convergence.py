@@ -272,3 +272,55 @@ def plot_convergence(study: dict, path: Path) -> Path:
     figure.savefig(path, dpi=120)
     plt.close(figure)
     return path
+
+
+def plot_histories(study: dict, path: Path) -> Path | None:
+    """Clamp force and stick area against real cycles, one line per level (each level's
+    results.h5), loosening marked where it became evident: how the levels' histories converge,
+    not only their end points. None when no level's results file is at hand."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    levels = sorted(study["levels"], key=lambda level: -level["size_mm"])  # coarse first
+    histories = []
+    for level in levels:
+        results = level.get("extra", {}).get("results")
+        if results is None or not Path(results).is_file():
+            continue
+        with h5py.File(results, "r") as file:
+            table = file["cycles"]
+            real = table["equivalent_cycles"][()]
+            shown = real > 0.0  # a log axis of real cycles: the preload stands for none
+            real = real[shown]
+            clamp = table["figures/clamp_force_N"][()][shown]
+            stick = table["figures/stick_area_fraction"][()][shown]
+        if real.size == 0:
+            continue
+        histories.append((level, real, clamp, stick))
+    if not histories:
+        return None
+    figure, (force, area) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    for level, real, clamp, stick in histories:
+        label = f"{level['size_mm']:g} mm ({level['points']:,} points): {level['verdict']}"
+        line, = force.plot(real, 1e-3 * clamp, label=label)
+        area.plot(real, 100.0 * stick, color=line.get_color())
+        evident = level["figures"].get("loosening_evident_at_cycles")
+        if evident is not None:
+            row = min(int(np.searchsorted(real, evident * (1.0 - 1e-12))), real.size - 1)
+            force.plot(real[row], 1e-3 * clamp[row], marker="v", color=line.get_color(), markersize=8)
+    force.plot([], [], marker="v", linestyle="none", color="0.3", label="loosening evident")
+    force.set_ylabel("clamp force (kN)")
+    force.legend(fontsize=8)
+    area.set_ylabel("stick area (% of nominal)")
+    area.set_xlabel("real load cycles")
+    area.set_xscale("log")
+    for ax in (force, area):
+        ax.grid(True, alpha=0.3)
+    figure.suptitle(f"mesh convergence over the run: {Path(study['scene']).stem}", fontsize=10)
+    figure.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path

@@ -81,6 +81,7 @@ def test_the_study_command_runs_each_size_and_reports_the_converged_one(coarse_c
     assert levels[0.4]["verdict"] == levels[0.2]["verdict"] == "damage"  # gross slip at μ_max
     assert study["converged_size_mm"] == 0.4 and study["verdicts_agree"]
     assert (out / "convergence.png").stat().st_size > 10_000 and (out / "convergence.json").is_file()
+    assert study["history_plot"] and (out / "convergence_cycles.png").stat().st_size > 10_000
 
 
 @pytest.mark.parametrize("sizes", ["5", "5,-1", "a,b"])
@@ -185,6 +186,7 @@ def test_the_study_command_passes_on_stop_at_loosening(coarse_cylinder, tmp_path
 
     monkeypatch.setattr(convergence, "convergence_study", study)
     monkeypatch.setattr(convergence, "plot_convergence", lambda study, path: path)
+    monkeypatch.setattr(convergence, "plot_histories", lambda study, path: None)
     assert main(["study", "convergence", str(coarse_cylinder), "--sizes", "10,5", "--stop-at-loosening",
                  "--out", str(tmp_path)]) == 0
     assert asked["stop_at_loosening"] is True
