@@ -73,6 +73,18 @@ FIELD_UNITS = {
     "fdp": "MPa*mm", "ffdp": "MPa^2*mm", "surface_tangential_stress": "MPa",
 }
 STATUS_NAMES = "0 open, 1 stick, 2 slip, 3 slip at cof_max"
+#: units of the cycle figures (/cycles/figures/<name>) by the end of their names, longest first
+FIGURE_UNITS = (("_fraction", "1 (of the nominal contact area, closed after the preload)"),
+                ("_MPa2_mm", "MPa^2*mm"), ("_MPa_mm", "MPa*mm"), ("_MPa", "MPa"), ("_mm3", "mm^3"),
+                ("_mm", "mm"), ("_mJ", "mJ"), ("_N", "N"), ("_margin", "1"))
+
+
+def figure_units(name: str) -> str:
+    """The units of the cycle figure ``name`` (:data:`FIGURE_UNITS`)."""
+    for ending, units in FIGURE_UNITS:
+        if name.endswith(ending):
+            return units
+    raise KeyError(f"no units known for the cycle figure {name!r}: add its ending to FIGURE_UNITS")
 
 
 def output_increments(field_output, increments_per_cycle: int) -> frozenset:
@@ -290,7 +302,7 @@ class ResultsWriter(Observer):
         self._row("phase", PHASES.index(summary.phase), "0 preload, 1 cof, 2 wear", "cycles")
         self._row("equivalent_cycles", summary.equivalent_cycles, "cycles", "cycles")
         for name, value in summary.figures.items():
-            self._row(f"figures/{name}", np.nan if value is None else value, "see README", "cycles")
+            self._row(f"figures/{name}", np.nan if value is None else value, figure_units(name), "cycles")
         if recorded:
             self._row("fields/cycle", summary.cycle, "1", "cycles")
             for name, value in self._fields(summary).items():

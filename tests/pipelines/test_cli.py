@@ -27,6 +27,11 @@ def test_run_prints_json_figures_and_writes_results(coarse_cylinder, tmp_path, c
         area = file["points/area"][()]
         assert np.sum(wear.sum(axis=0) * area) == pytest.approx(summary["wear_volume_mm3"], rel=1e-9)
         assert file["final/pressure"].attrs["units"] == "MPa"
+        figures = file["cycles/figures"]
+        assert figures["clamp_force_N"].attrs["units"] == "N" and figures["fdp_max_MPa_mm"].attrs["units"] == "MPa*mm"
+        assert figures["stick_area_fraction"].attrs["units"].startswith("1 ")
+        assert figures["wear_volume_mm3"].attrs["units"] == "mm^3"
+        assert all(figures[name].attrs["units"] for name in figures)
     assert (out / "plots" / "fields.png").stat().st_size > 10_000
     monkeypatch.chdir(out)  # meshio's reader resolves the XDMF's heavy-data file from the cwd
     with meshio.xdmf.TimeSeriesReader("interface.xdmf") as reader:
