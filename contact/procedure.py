@@ -137,6 +137,10 @@ class CycleSummary:
     clamp_force: float | None
     figures: dict = field(default_factory=dict)
     damage: dict = field(default_factory=dict)  # fretting damage fields an observer adds (pipelines.output.damage)
+    #: real cycles at which loosening became evident (:func:`contact.verdict.loosening_evident`),
+    #: in this cycle or earlier in the run; None while it is not: once set, the verdict is
+    #: loosening unless the joint shakes down later
+    loosening_evident_at: float | None = None
 
 
 @dataclass
@@ -366,7 +370,6 @@ class _Run:
             self.history.append(summary)
             del self.history[:-max(loosening_window_blocks(self.history, self.procedure),
                                    self.procedure.stationary_window + 1)]
-            self.observer.cycle(summary)
             slid = summary.figures["active_slip_area_fraction"] > self.procedure.area_tolerance
             running_up = self.vibration(phase, self.cycle_number - 1) < 1.0  # began below full amplitude
             self.quiet_cycles = 0 if slid or running_up else self.quiet_cycles + 1
@@ -377,6 +380,8 @@ class _Run:
                 loosening = self.procedure.stop_at_loosening
                 if self.loosening_at is None:
                     self.loosening_at = self.equivalent
+            summary.loosening_evident_at = self.loosening_at
+            self.observer.cycle(summary)
             if checkpoint_every and self.cycle_number % checkpoint_every == 0:
                 self.solver.at_checkpoint()
                 if checkpoint is not None and not (self.stationary or loosening or count + 1 == n_cycles):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +38,7 @@ class ProgressBar:
                         dynamic_ncols=True, leave=True)
         self.phase_times: dict[str, float] = {}
         self._current: tuple[str, float] | None = None
+        self._loosening_said = False
 
     def _stop_clock(self):
         if self._current is not None:
@@ -56,8 +58,18 @@ class ProgressBar:
         # what slid in the cycle, and what sits at the friction limit (it need not move: in
         # normal operation a third of the pads sits at the limit of μ₀ and sticks), of the area
         figures = summary.figures
-        self.bar.set_postfix(sliding=f"{figures['active_slip_area_fraction']:.2f}",
-                             at_limit=f"{figures['slip_area_fraction']:.2f}", refresh=False)
+        shown = {"sliding": f"{figures['active_slip_area_fraction']:.2f}",
+                 "at_limit": f"{figures['slip_area_fraction']:.2f}"}
+        if summary.clamp_force is not None:
+            shown["clamp"] = f"{1e-3 * summary.clamp_force:.1f}kN"
+        self.bar.set_postfix(shown, refresh=False)
+        if summary.loosening_evident_at is not None and not self._loosening_said:
+            # a long run that goes on to its life horizon: its verdict is known from here on
+            self._loosening_said = True
+            if not self.bar.disable:
+                self.bar.write(f"loosening evident after {summary.loosening_evident_at:.3g} real cycles: the "
+                               "verdict is loosening unless the joint shakes down later (Ctrl-C stops the run; "
+                               "--resume goes on from its last checkpoint)", file=sys.stderr)
         self.bar.update(1)
 
     def close(self, reason: str | None = None, *, done: bool = False):

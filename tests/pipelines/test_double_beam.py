@@ -111,3 +111,6 @@ def test_high_slip_returns_to_gross_slip_and_loosens():
     clamp = np.array([c.clamp_force for c in wear])
     assert np.all(np.diff(clamp) < 0.0)  # falling in every cycle of the window
     assert figures["cycles_run"] < 100 + 300  # stopped on loosening, not at the end
+    # the cycle that made it evident carries when, for the observers (the progress bar says so)
+    assert result.cycles[-1].loosening_evident_at == figures["loosening_evident_at_cycles"]
+    assert all(c.loosening_evident_at is None for c in result.cycles[:-1])

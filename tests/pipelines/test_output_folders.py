@@ -195,6 +195,24 @@ def test_a_run_that_ends_early_ends_its_progress_bar_full_with_the_reason(capsys
     assert "3/100" in last and "stopped: the joint slides off" in last
 
 
+def test_a_long_run_says_once_when_loosening_became_evident(capsys):
+    """A run that goes on to its horizon says when its verdict became known (on stderr, beside
+    the bar: --json output stays clean), and shows the clamp force as it goes."""
+    from types import SimpleNamespace
+
+    from pipelines.jobs.run import ProgressBar
+
+    bar = ProgressBar(10, True, "scene")
+    figures = {"active_slip_area_fraction": 0.8, "slip_area_fraction": 0.9}
+    for evident, clamp in ((None, 879.3e3), (6.9e5, 872.1e3), (6.9e5, 871.0e3)):
+        bar.cycle(SimpleNamespace(figures=figures, clamp_force=clamp, loosening_evident_at=evident))
+    bar.close()
+    said = capsys.readouterr()
+    assert said.out == ""
+    assert said.err.count("loosening evident after 6.9e+05 real cycles") == 1
+    assert "clamp=871.0kN" in said.err
+
+
 def test_a_folder_without_write_permission_is_refused(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "access", lambda path, mode: Path(path) != tmp_path)  # root may write anywhere
     with pytest.raises(InputError, match=rf"^--out {tmp_path}/out: {tmp_path} is not writable \(permission denied\)$"):
