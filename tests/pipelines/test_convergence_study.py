@@ -191,3 +191,19 @@ def test_the_study_command_passes_on_stop_at_loosening(coarse_cylinder, tmp_path
                  "--out", str(tmp_path)]) == 0
     assert asked["stop_at_loosening"] is True
     assert "5 mm: loosening evident after 1.5e+06 real cycles (the run stopped there)" in capsys.readouterr().out
+
+
+def test_a_size_the_meshes_refuse_is_said_before_any_level_runs(tmp_path, capsys):
+    """The double beam's hole block must be a whole number of elements: 2 mm does not fit. The
+    study says so naming the size, and no level has run (no level folder)."""
+    from pathlib import Path
+
+    from pipelines.cli.main import main
+
+    scene = Path(__file__).resolve().parents[2] / "examples" / "double_beam_high_slip.toml"
+    out = tmp_path / "study"
+    assert main(["study", "convergence", str(scene), "--sizes", "3,2", "--workers", "0", "--out", str(out),
+                 "--no-cache", "--quiet"]) == 2
+    said = capsys.readouterr().err
+    assert "--sizes: 2 mm does not suit body" in said and "multiples of the contact element size" in said
+    assert not list(out.glob("size_*"))
