@@ -286,9 +286,16 @@ def plot_convergence(study: dict, path: Path) -> Path:
     bottom.set_xticks(sizes, [f"{size:g}" for size in sizes])
     bottom.minorticks_off()
     bottom.invert_xaxis()
-    for ax in axes[:, 0]:
+    return _save(figure, axes[:, 0], f"mesh convergence: {Path(study['scene']).stem}", path)
+
+
+def _save(figure, axes, title: str, path: Path) -> Path:
+    """Grid the axes, title the figure, write it to ``path`` (PNG) and close it."""
+    import matplotlib.pyplot as plt
+
+    for ax in axes:
         ax.grid(True, alpha=0.3)
-    figure.suptitle(f"mesh convergence: {Path(study['scene']).stem}", fontsize=10)
+    figure.suptitle(title, fontsize=10)
     figure.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=120)
@@ -338,11 +345,4 @@ def plot_histories(study: dict, path: Path) -> Path | None:
     area.set_ylabel("stick area (% of nominal)")
     area.set_xlabel("real load cycles")
     area.set_xscale("log")
-    for ax in (force, area):
-        ax.grid(True, alpha=0.3)
-    figure.suptitle(f"mesh convergence over the run: {Path(study['scene']).stem}", fontsize=10)
-    figure.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
-    return path
+    return _save(figure, (force, area), f"mesh convergence over the run: {Path(study['scene']).stem}", path)
