@@ -187,7 +187,7 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
     equivalent = cycles["equivalent_cycles"][()]
     clamp = figures.get("clamp_force_N")
     has_clamp = clamp is not None and np.any(np.isfinite(clamp[()]))
-    fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(7, 5.2 if has_clamp else 3.2), sharex=True)
+    fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(9, 5.2 if has_clamp else 3.2), sharex=True)
     axes = np.atleast_1d(axes)
     for key, name in AREA_LABELS.items():
         if key in figures:
@@ -196,7 +196,8 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
     # above 1 where wear or a moving patch brings points beyond the preload's area into contact
     largest = max((np.nanmax(figures[key][()], initial=0.0) for key in AREA_LABELS if key in figures), default=1.0)
     axes[0].set_ylim(-0.03, 1.03 * max(1.0, largest))
-    axes[0].legend(fontsize=7, loc="best")
+    # beside the axes: the areas fill the whole plot over a run, and a legend inside hid them
+    axes[0].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     axes[0].grid(alpha=0.3)
     if has_clamp:
         force = clamp[()] / 1000.0
