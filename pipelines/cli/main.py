@@ -284,9 +284,10 @@ def cmd_convergence(args) -> int:
     if args.json:
         print(_json(study))
         return 0
+    levels = sorted(study["levels"], key=lambda level: -level["size_mm"])  # coarse first
     print(f"{'size mm':>8} {'points':>7} {'verdict':>10} {'stick %':>8} {'sliding %':>9} {'worn %':>7} "
           f"{'max wear µm':>11} {'clamp loss %':>12} {'margin':>7} {'limit µm':>9}")
-    for level in sorted(study["levels"], key=lambda level: -level["size_mm"]):
+    for level in levels:
         f = level["figures"]
         print(f"{level['size_mm']:>8g} {level['points']:>7} {level['verdict']:>10} {_percent(f['stick_area_fraction']):>8} "
               f"{_percent(f['active_slip_area_fraction']):>9} {_percent(f['worn_area_fraction']):>7} "
@@ -296,12 +297,12 @@ def cmd_convergence(args) -> int:
     if study.get("common_cycles"):
         print(f"at equal running time, {study['common_cycles']:.4g} real cycles (the shortest run that did not "
               "shake down):")
-        for level in sorted(study["levels"], key=lambda level: -level["size_mm"]):
+        for level in levels:
             f = level["extra"]["at_common_cycles"]
             print(f"{level['size_mm']:>8g} {'':>7} {'':>10} {_percent(f['stick_area_fraction']):>8} "
                   f"{_percent(f['active_slip_area_fraction']):>9} {_percent(f['worn_area_fraction']):>7} "
                   f"{1e3 * (f['max_wear_depth_mm'] or 0.0):>11.2f} {_percent(f['clamp_force_loss_fraction']):>12}")
-    for level in sorted(study["levels"], key=lambda level: -level["size_mm"]):
+    for level in levels:
         evident = level["figures"].get("loosening_evident_at_cycles")
         if evident is not None:
             print(f"{level['size_mm']:>8g} mm: loosening evident after {evident:.4g} real cycles"

@@ -5,9 +5,9 @@ verdict, stick / sliding / worn areas, maximum wear depth, clamp-force loss, min
 margin, the real cycles after which loosening was evident (a loosening joint's design figure)
 and, when asked, the wing-amplitude limit. With ``stop_at_loosening`` every level ends once its
 loosening is evident, whatever the scene says: a verdict check of a scene that runs on to its
-life horizon (the extreme counterweight) then costs the run-up to the verdict, not the horizon. Where three or more levels halve the size
-and a figure converges monotonically, Richardson extrapolation estimates its limit h → 0 and
-the observed order. A scene is converged at a size when its verdict equals that of the next
+life horizon (the extreme counterweight) then costs the run-up to the verdict, not the
+horizon. Where three or more levels halve the size and a figure converges monotonically,
+Richardson extrapolation estimates its limit h → 0 and the observed order. A scene is converged at a size when its verdict equals that of the next
 finer level and its limit is within ``limit_tolerance`` of the finest level's.
 """
 
