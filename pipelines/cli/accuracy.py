@@ -63,7 +63,8 @@ def add_accuracy_parser(kinds) -> None:
     parser.add_argument("--out", default="results/accuracy", help="directory of the Pareto plot and JSON")
     parser.add_argument("--quick", action="store_true", help="two values per knob, wear ≤ 4 and COF ≤ 10 cycles")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="scene override for every run, e.g. procedure.cof_cycles=10 (repeat)")
+                        help="scene override for every run, e.g. procedure.cof_cycles=10 or motions.0.value=0.05 "
+                             "(an entry of [[loads]] or [[motions]] by position or name; repeat)")
     parser.add_argument("--knob", action="append", default=[], metavar="NAME=V1,V2",
                         help="replace a knob's sweep, e.g. contact_size=3,4,6 (repeat)")
     add_cluster_arguments(parser)

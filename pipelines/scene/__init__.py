@@ -141,10 +141,37 @@ def load(path: str | Path, overrides: dict | None = None) -> Scene:
 
 
 def apply_overrides(data: dict, overrides: dict) -> None:
-    """Set dotted keys in place, e.g. {"bodies.plane.mesh.contact_size": 0.1}."""
+    """Set dotted keys in place, e.g. {"bodies.plane.mesh.contact_size": 0.1}.
+
+    An entry of an array of tables ([[loads]], [[motions]]) is addressed by its position from
+    0 or by its ``name``: "motions.0.value" or "motions.tangential.value". A key that runs
+    into a value, or names no entry, is an InputError that says what is there."""
     for dotted, value in overrides.items():
-        node = data
-        *parents, leaf = dotted.split(".")
-        for key in parents:
-            node = node.setdefault(key, {})
-        node[leaf] = value
+        node, keys = data, dotted.split(".")
+        for depth, key in enumerate(keys):
+            where, last = ".".join(keys[:depth]) or "the scene", depth == len(keys) - 1
+            if isinstance(node, list):
+                node = _entry(node, key, dotted, where)
+                if last:
+                    raise InputError(f"{dotted}: an entry of {where} is a table; set one of its keys "
+                                     f"({dotted}.KEY)")
+            elif not isinstance(node, dict):
+                raise InputError(f"{dotted}: {where} is a value ({node!r}), not a table with keys")
+            elif last:
+                node[key] = value
+            else:
+                node = node.setdefault(key, {})
+
+
+def _entry(entries: list, key: str, dotted: str, where: str) -> dict:
+    """The entry of an array of tables named by ``key``: its position from 0, or its name."""
+    if not all(isinstance(entry, dict) for entry in entries):
+        raise InputError(f"{dotted}: {where} is an array of values; give it whole ({where} = [...])")
+    names = [entry.get("name") for entry in entries]
+    if key.isdigit() and int(key) < len(entries):
+        return entries[int(key)]
+    if key in names:
+        return entries[names.index(key)]
+    named = f" or a name ({', '.join(map(str, names))})" if any(names) else ""
+    raise InputError(f"{dotted}: {where} is an array of {len(entries)} table{'s' * (len(entries) != 1)}; "
+                     f"address an entry by its position (0 to {len(entries) - 1}){named}, not {key!r}")

@@ -1,5 +1,7 @@
 """Scene files: a valid scene builds; every kind of bad input is named in one clear message."""
 
+import re
+
 import pytest
 
 from pipelines import scene as scenes
@@ -78,3 +80,20 @@ history = "ramp"
     message = _problems(text)
     assert "whose material has no density" in message
     assert "'body_loads[0].angular_velocity' is missing" in message
+
+
+def test_overrides_address_arrays_of_tables_and_refuse_what_is_not_a_table():
+    """Dotted overrides (``--set``, studies): an entry of [[motions]] by position or name; a
+    key that runs into a value or past the array is an InputError naming what is there."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "cylinder_on_plane.toml"
+    assert scenes.load(path, {"motions.0.value": 0.1}).data["motions"][0]["value"] == 0.1
+    assert scenes.load(path, {"motions.tangential.value": 0.2}).data["motions"][0]["value"] == 0.2
+    cases = {"motions.3.value": "position (0 to 0) or a name (tangential), not '3'",
+             "motions.0": "an entry of motions is a table",
+             "procedure.wear_cycles.x": "procedure.wear_cycles is a value (20)",
+             "scene.effects.0": "scene.effects is an array of values"}
+    for key, words in cases.items():
+        with pytest.raises(InputError, match=re.escape(words)):
+            scenes.load(path, {key: 1.0})
