@@ -1,4 +1,4 @@
-"""The dense path's floor per increment at a given size (README, Performance).
+"""The dense path's floor per increment at a given size (docs/performance.md).
 
 ``python tests/bench/dense_floor.py [--rows 4566] [--newton 2.6] [--increments 11410]`` times,
 on one BLAS thread (best of 30), the kernels of one increment of the dense Krylov path on a

@@ -1,4 +1,4 @@
-"""What the cylinder's re-pairing threshold costs and changes (README, Performance).
+"""What the cylinder's re-pairing threshold costs and changes (docs/performance.md).
 
 ``python tests/bench/repair_fraction.py [FRACTIONS]`` runs ``examples/cylinder_on_plane.toml``
 once per fraction (default 0.05,0.1,0.2,0.35,0.5,1.0; the first is the reference) with

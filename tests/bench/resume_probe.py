@@ -1,4 +1,4 @@
-"""What the dense Krylov path does in a resumed run (README, Performance: one preconditioner
+"""What the dense Krylov path does in a resumed run (docs/performance.md: one preconditioner
 per load step).
 
 ``python tests/bench/resume_probe.py SCENE OUT [--cache DIR] [--every 20]`` continues the run

@@ -1,4 +1,4 @@
-"""How far each Krylov solve's tangent is from its preconditioner's (README, Performance).
+"""How far each Krylov solve's tangent is from its preconditioner's (docs/performance.md).
 
 ``python tests/bench/tangent_probe.py [--size 2.5] [--cof 20] [--wear 10]`` runs
 ``examples/counterweight_extreme.toml`` at that contact size for that many COF cycles and wear
