@@ -309,7 +309,8 @@ class FullModelSolver:
         return self.model.stiffness @ u + self.GT @ forces - external, kinematics, response, forces
 
     def _solve_to(self, start: FullEquilibrium, state: ContactState, amplitudes: np.ndarray,
-                  stats: IncrementStats):
+                  stats: IncrementStats, position: tuple[int, int] | None = None):
+        """Newton from ``start`` (no predictors here: ``position`` is not used)."""
         model, settings = self.model, self.settings
         external = model.pattern_force @ amplitudes - model.prescribed_stiffness @ (model.pattern_motion @ amplitudes)
         force_scale = max(1.0, float(np.max(np.abs(model.pattern_force @ amplitudes), initial=0.0)),
@@ -346,6 +347,7 @@ class FullModelSolver:
         return "diverged", "Newton did not converge on the full model"
 
     def increment(self, start: FullEquilibrium, state: ContactState, amplitudes: np.ndarray,
-                  effects: Effects) -> tuple[FullEquilibrium, ContactState, np.ndarray, IncrementStats]:
+                  effects: Effects, position: tuple[int, int] | None = None
+                  ) -> tuple[FullEquilibrium, ContactState, np.ndarray, IncrementStats]:
         """Advance to the load ``amplitudes`` through the sub-steps of :meth:`ContactSolver.increment`."""
-        return advance_with_cutbacks(self, start, state, amplitudes, effects)
+        return advance_with_cutbacks(self, start, state, amplitudes, effects, position)

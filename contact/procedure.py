@@ -253,10 +253,11 @@ class _Run:
     def clamp_force(self):
         return None if self.bolts is None else float(self.bolt_forces().sum())
 
-    def step(self, amplitudes, effects, phase, cycle, t):
-        """One load increment; the observer sees it. Returns the point status."""
+    def step(self, amplitudes, effects, phase, cycle, t, position=None):
+        """One load increment (``position``: its (k, n) in a load cycle); the observer sees it.
+        Returns the point status."""
         self.equilibrium, self.state, status, stats = self.solver.increment(self.equilibrium, self.state,
-                                                                           amplitudes, effects)
+                                                                           amplitudes, effects, position)
         self.observer.increment(IncrementRecord(phase, cycle, t, self.equilibrium, self.state, status,
                                                 stats.iterations, stats.max_iterations, stats.cutbacks,
                                                 stats.substeps, self.bolt_forces()))
@@ -321,7 +322,7 @@ class _Run:
         for k in range(1, n_inc + 1):
             t = self.cycle_number - 1 + k / n_inc
             status = self.step(self.program.cycle(k / n_inc, self.vibration(phase, t)), effects, phase,
-                               self.cycle_number, t)
+                               self.cycle_number, t, (k, n_inc))
             utilisation, shear_now = _utilisation(self.equilibrium, solver)
             max_util, max_shear = np.maximum(max_util, utilisation), np.maximum(max_shear, shear_now)
             worst = np.maximum(worst, status)

@@ -252,7 +252,8 @@ class SlidingSolver:
                             np.zeros(rows * self.space.structure.dim), np.zeros(0))
         self._repair(state.paired_at, start, replace(state, master_wear=None))
 
-    def increment(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray, effects: Effects):
+    def increment(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray, effects: Effects,
+                  position: tuple[int, int] | None = None):
         """:meth:`ContactSolver.increment`, re-pairing first where the bodies have slid."""
         state = sliding_state(state)
         if state.paired_at is not None and not np.array_equal(state.paired_at, self.paired_at):
@@ -266,7 +267,7 @@ class SlidingSolver:
                 state = replace(state, master_wear=master_wear_field(self.pairing, state.wear_depth[1]))
             if self.finite and slid > self.repair_fraction:
                 start, state = self._repair(displacement, start, state)
-        equilibrium, new_state, status, stats = self.solver.increment(start, state, amplitudes, effects)
+        equilibrium, new_state, status, stats = self.solver.increment(start, state, amplitudes, effects, position)
         if new_state.master_wear is not None and effects.wear:
             added = new_state.wear_depth[1] - state.wear_depth[1]
             new_state = replace(new_state, master_wear=new_state.master_wear

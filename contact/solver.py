@@ -110,13 +110,20 @@ class IncrementStats:
     substeps: int = 0
 
 
-def _load_step(start: np.ndarray | None, target: np.ndarray) -> bytes:
+def _load_step(start: np.ndarray | None, target: np.ndarray) -> tuple:
     """The key of a load step: where it starts and where it ends (``start`` None: the load
     level ``target`` however it was reached). The level alone does not name a point of a
     cycle: a harmonic load passes every level twice, rising and falling, and with friction
     the two equilibria differ."""
     end = np.asarray(target, dtype=float).tobytes()
-    return end if start is None else np.asarray(start, dtype=float).tobytes() + end
+    return ("level", end) if start is None else ("step", np.asarray(start, dtype=float).tobytes(), end)
+
+
+def _cycle_step(position: tuple[int, int]) -> tuple:
+    """The key of the k-th of n increments of a load cycle, whatever its amplitudes: the same
+    point of successive cycles also while the vibration runs up or the COF evolves."""
+    k, n = position
+    return ("position", int(k), int(n))
 
 
 def _extrapolation_factor(before_gap, earlier_gap, gap) -> float:
@@ -206,8 +213,9 @@ class ContactSolver:
 
         Each distinct remembered equilibrium once (``kinematics``, ``control``, ``forces``,
         ``amplitudes``, ``gap``: stacked), and per key in memory order its ``start`` and ``end``
-        amplitudes (``start`` NaN for a load level) and the indices of its last and earlier
-        equilibria (``before`` −1 for none)."""
+        amplitudes (``start`` NaN for a load level; both NaN for a point of the cycle), its
+        ``position`` in the cycle (k, n; −1 for a load step or level) and the indices of its
+        last and earlier equilibria (``before`` −1 for none)."""
         solved, index = [], {}
         def number(entry) -> int:
             if entry[0] is None:
@@ -217,12 +225,16 @@ class ContactSolver:
                 solved.append(entry)
             return index[id(entry[0])]
         n_patterns = len(self.space.structure.patterns)
-        starts, ends, last, before = [], [], [], []
+        starts, ends, positions, last, before = [], [], [], [], []
+        nothing = np.full(n_patterns, np.nan)
         for key, (latest, earlier) in self._solved_at.items():
-            amplitudes = np.frombuffer(key, dtype=float)
-            start = amplitudes[:-n_patterns] if amplitudes.size > n_patterns else np.full(n_patterns, np.nan)
-            starts.append(start)
-            ends.append(amplitudes[-n_patterns:])
+            kind, *rest = key
+            if kind == "position":
+                starts.append(nothing), ends.append(nothing), positions.append(rest)
+            else:
+                positions.append((-1, -1))
+                starts.append(np.frombuffer(rest[0], dtype=float) if kind == "step" else nothing)
+                ends.append(np.frombuffer(rest[-1], dtype=float))
             last.append(number(latest))
             before.append(number(earlier))
         if not solved:
@@ -233,6 +245,7 @@ class ContactSolver:
         memory.update(gap=np.stack([np.broadcast_to(gap, shape) for _, gap in solved]),
                       start=np.array(starts).reshape(len(starts), n_patterns),
                       end=np.array(ends).reshape(len(ends), n_patterns),
+                      position=np.array(positions, dtype=int).reshape(len(positions), 2),
                       last=np.array(last), before=np.array(before))
         return memory
 
@@ -243,8 +256,14 @@ class ContactSolver:
             return
         solved = [(Equilibrium(*(memory[name][k] for name in ("kinematics", "control", "forces", "amplitudes"))),
                    memory["gap"][k]) for k in range(memory["kinematics"].shape[0])]
-        for start, end, last, before in zip(memory["start"], memory["end"], memory["last"], memory["before"]):
-            key = _load_step(None if np.all(np.isnan(start)) else start, end)
+        # a checkpoint written before cycle positions were keys has none
+        positions = memory.get("position", np.full((len(memory["last"]), 2), -1))
+        for start, end, position, last, before in zip(memory["start"], memory["end"], positions,
+                                                       memory["last"], memory["before"]):
+            if position[0] >= 0:
+                key = _cycle_step(position)
+            else:
+                key = _load_step(None if np.all(np.isnan(start)) else start, end)
             self._solved_at[key] = (solved[last], solved[before] if before >= 0 else (None, None))
 
     def initial_equilibrium(self) -> Equilibrium:
@@ -356,14 +375,17 @@ class ContactSolver:
         return -r_kin - self.space.E @ delta_q, delta_q
 
     def _solve_to(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
-                  stats: IncrementStats) -> tuple[Equilibrium, Response] | None:
+                  stats: IncrementStats, position: tuple[int, int] | None = None
+                  ) -> tuple[Equilibrium, Response] | None:
         """Newton from ``start`` to the load ``amplitudes``; None if it does not converge.
+        ``position``: (k, n) when this is the whole k-th increment of a load cycle of n.
 
         A monotone line search first; if that fails, once more with the non-monotone one
         (``settings.line_search_window``) before the caller cuts the step back."""
-        solved = self._newton(start, state, amplitudes, stats, window=1)
+        key = _load_step(start.amplitudes, amplitudes) if position is None else _cycle_step(position)
+        solved = self._newton(start, state, amplitudes, stats, key, window=1)
         if solved is None and self.settings.line_search_window > 1:
-            solved = self._newton(start, state, amplitudes, stats, window=self.settings.line_search_window)
+            solved = self._newton(start, state, amplitudes, stats, key, window=self.settings.line_search_window)
         return solved
 
     def _scales(self, start: Equilibrium, amplitudes: np.ndarray, f_q: np.ndarray) -> tuple[float, bool]:
@@ -402,7 +424,7 @@ class ContactSolver:
         shift[pressed, 0] = change
         return shift.ravel()
 
-    def _predictor(self, start: Equilibrium, state: ContactState, amplitudes, g_f, f_q, force_scale):
+    def _predictor(self, start: Equilibrium, state: ContactState, amplitudes, g_f, f_q, force_scale, key):
         """(merit, g, q, residual) of the best of the predictors: the contact kinematics follow
         the drive (right in gross slip and for a free approach) or stay put (right where the
         interface sticks; with a stiff elastic stick, small γ_crit, following the drive makes
@@ -415,19 +437,24 @@ class ContactSolver:
         equilibrium at the same load level, however it was reached, pressed again against the
         current gap.
 
-        Once a load step (the same start and end) has been solved twice, the load is cyclic and
-        two others replace all three: the last equilibrium of that step (the same point of the
-        previous cycle; in a steady cycle nearly the answer, where the first two start from the
+        Once a load step (``key``: the same place in the load cycle, or without one the same
+        start and end amplitudes) has been solved twice, the load is cyclic and two others
+        replace all three: the last equilibrium of that step (the same point of the previous
+        cycle; in a steady cycle nearly the answer, where the first two start from the
         previous increment's load) and the extrapolation of the last two, by the wear gap's
-        change since the later one in units of its change between them: under wear or an
-        evolving COF the cycles drift, smoothly from one to the next (the adaptive jump keeps
-        it so). The counterweight's wear phase (10 mm): 4.5 → 2.5 Newton iterations per
-        increment. Each candidate costs a residual pass; with the cyclic two on offer, staying
-        put won 1.4 % of the counterweight's increments (10 mm) and following the drive none,
-        and dropping them took 6.9 → 4.8 residual passes per increment (and 2 % fewer Newton
-        iterations)."""
+        change since the later one in units of its change between them (one cycle's change
+        where the gap has not moved): under wear, an evolving COF or a vibration that runs up
+        the cycles drift, smoothly from one to the next (the adaptive jump keeps it so). The
+        counterweight's wear phase (10 mm): 4.5 → 2.5 Newton iterations per increment. Each
+        candidate costs a residual pass; with the cyclic two on offer, staying put won 1.4 %
+        of the counterweight's increments (10 mm) and following the drive none, and dropping
+        them took 6.9 → 4.8 residual passes per increment (and 2 % fewer Newton iterations).
+        Known by their amplitudes alone, the steps of a run-up never repeat (the vibration
+        grows every cycle), so its 300 cycles went without the cyclic two: known by their
+        place in the cycle, the counterweight's run-up at 10 mm took 2.0 instead of 4.4–4.9
+        Newton iterations and 4.0 instead of 7.8–9.7 residual passes per increment."""
         candidates = []
-        solved = self._solved_at.get(_load_step(start.amplitudes, amplitudes))
+        solved = self._solved_at.get(key)
         if solved is not None and solved[1][0] is not None:  # a step solved twice before: a cycle
             (earlier, earlier_gap), (before, before_gap) = solved
             factor = _extrapolation_factor(before_gap, earlier_gap, state.gap)
@@ -450,25 +477,25 @@ class ContactSolver:
                 best = (candidate_merit, g, q.copy(), candidate)
         return best
 
-    def _remember(self, start: Equilibrium, solved: Equilibrium, state: ContactState) -> None:
+    def _remember(self, key: tuple, solved: Equilibrium, state: ContactState) -> None:
         """Keep ``solved`` (and the wear gap it was solved against) as the cyclic predictor of
         its load step, with the one before it at that step, and as the last equilibrium at its
         load level: 128 keys in all, the oldest dropped first (a load that never repeats, a
         tabulated program or cut-back sub-steps, must not grow the memory)."""
         gap = np.array(state.gap, dtype=float, copy=True)
-        for key in (_load_step(start.amplitudes, solved.amplitudes), _load_step(None, solved.amplitudes)):
-            earlier = self._solved_at.pop(key, ((None, None), None))[0]
-            self._solved_at[key] = ((solved, gap), earlier)
+        for each in (key, _load_step(None, solved.amplitudes)):
+            earlier = self._solved_at.pop(each, ((None, None), None))[0]
+            self._solved_at[each] = ((solved, gap), earlier)
         while len(self._solved_at) > 128:
             del self._solved_at[next(iter(self._solved_at))]
 
     def _newton(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
-                stats: IncrementStats, window: int) -> tuple[Equilibrium, Response] | None:
+                stats: IncrementStats, key: tuple, window: int) -> tuple[Equilibrium, Response] | None:
         g_f, f_q = self.space.driving(amplitudes)
         force_scale, loaded = self._scales(start, amplitudes, f_q)
         reference = start.kinematics
         merit, g, q, (r_kin, r_ctl, response, forces) = self._predictor(start, state, amplitudes, g_f, f_q,
-                                                                         force_scale)
+                                                                         force_scale, key)
         recent, history, stalled = [merit], [merit], False  # merits for the line search
         previous_status = None
         for iteration in range(1, self.settings.max_iterations + 1):
@@ -512,7 +539,7 @@ class ContactSolver:
                 stats.iterations += iteration
                 stats.max_iterations = max(stats.max_iterations, iteration)
                 solved = Equilibrium(g, q, forces, amplitudes.copy())
-                self._remember(start, solved, state)
+                self._remember(key, solved, state)
                 return solved, response
         stats.iterations += self.settings.max_iterations
         self._last_failure = (response, r_ctl, force_scale, loaded)
@@ -541,8 +568,11 @@ class ContactSolver:
                 "interface into gross slip)")
 
     def increment(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
-                  effects: Effects) -> tuple[Equilibrium, ContactState, np.ndarray, IncrementStats]:
+                  effects: Effects, position: tuple[int, int] | None = None
+                  ) -> tuple[Equilibrium, ContactState, np.ndarray, IncrementStats]:
         """Advance from ``start`` to the load ``amplitudes``, cutting back as needed.
+        ``position``: (k, n) when this is the k-th increment of a load cycle of n (the cyclic
+        predictors then recall the same point of the last cycles, see :meth:`_predictor`).
 
         A sub-step that fails (or wears more than the cap) is halved; two in a row that
         succeed let the next grow back by a factor two (growing after every success would
@@ -553,14 +583,16 @@ class ContactSolver:
         sub-step of that smallest size still fails.
         """
         with blas_threads(self.settings.blas_threads):
-            return advance_with_cutbacks(self, start, state, amplitudes, effects)
+            return advance_with_cutbacks(self, start, state, amplitudes, effects, position)
 
 
-def advance_with_cutbacks(solver, start, state: ContactState, amplitudes: np.ndarray, effects: Effects):
+def advance_with_cutbacks(solver, start, state: ContactState, amplitudes: np.ndarray, effects: Effects,
+                          position: tuple[int, int] | None = None):
     """The sub-stepping of :meth:`ContactSolver.increment`, for any solver with ``law``,
-    ``settings``, ``_solve_to(equilibrium, state, target, stats)`` (→ (equilibrium, response)
-    or None) and ``_failure_reason()``: the condensed solver and the full reference model
-    advance through the same sub-steps."""
+    ``settings``, ``_solve_to(equilibrium, state, target, stats, position)`` (→ (equilibrium,
+    response) or None) and ``_failure_reason()``: the condensed solver and the full reference
+    model advance through the same sub-steps. ``position`` (the increment's place in its load
+    cycle) is handed on only with the whole increment, not with a cut-back sub-step."""
     stats = IncrementStats()
     origin, target = start.amplitudes, np.asarray(amplitudes, dtype=float)
     equilibrium, status = start, None
@@ -569,7 +601,8 @@ def advance_with_cutbacks(solver, start, state: ContactState, amplitudes: np.nda
     while done < 1.0:
         reach = min(1.0, done + 0.5 ** level)
         sub_target = target if reach == 1.0 else origin + reach * (target - origin)
-        solved = solver._solve_to(equilibrium, state, sub_target, stats)
+        whole = done == 0.0 and reach == 1.0
+        solved = solver._solve_to(equilibrium, state, sub_target, stats, position if whole else None)
         too_much_wear = False
         if solved is not None and effects.wear and np.isfinite(solver.settings.wear_cap):
             wear_now = wear_increment(solved[1], solver.law, effects.cycle_jump).sum(axis=0)

@@ -2,7 +2,7 @@
 its peak memory is its own).
 
 ``python tests/bench/scene_run.py SCENE [--size H] [--cycles N] [--linear auto|dense]
-[--solver auto|dense|sparse] [--fields OUT.npz] [--plots]`` runs ``examples/SCENE.toml`` (with
+[--solver auto|dense|sparse] [--set KEY=VALUE ...] [--fields OUT.npz] [--plots]`` runs ``examples/SCENE.toml`` (with
 ``contact_size = H`` mm on every body that has one; the shipped procedure unless ``--cycles``
 keeps only that many COF cycles; ``--solver`` sets ``[contact] solver``, the contact path) and
 prints one JSON line: verdict, points, set-up and procedure times, increments,
@@ -37,6 +37,7 @@ sys.path.insert(0, str(ROOT))
 
 from contact.linear import KrylovSettings  # noqa: E402
 from pipelines import scene as scenes  # noqa: E402
+from pipelines.cli.accuracy import _parse_pairs, _parse_value  # noqa: E402
 from pipelines.build import build  # noqa: E402
 from pipelines.coupling import multibody_loading  # noqa: E402
 from pipelines.jobs.run import run_model  # noqa: E402
@@ -98,12 +99,15 @@ def main(argv: list[str] | None = None) -> int:
                         help="auto: the shipped choice; dense: exact LU of the dense system every iteration")
     parser.add_argument("--solver", choices=("auto", "dense", "sparse"), default="auto",
                         help="the contact path ([contact] solver): auto is the shipped choice")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="a further scene override, e.g. procedure.stop_at_loosening=true (repeat)")
     parser.add_argument("--fields", type=Path, default=None,
                         help="write the final fields (and more: saved_fields) here (.npz)")
     args = parser.parse_args(argv)
     pin_process()  # as the command line does
     path = ROOT / "examples" / f"{args.scene}.toml"
-    scene = scenes.load(path, overrides(path, args.size, args.cycles, args.solver))
+    extra = {key: _parse_value(value, f"--set {key}") for key, value in _parse_pairs(args.set, "--set").items()}
+    scene = scenes.load(path, {**overrides(path, args.size, args.cycles, args.solver), **extra})
     start_cpu, start = time.process_time(), time.perf_counter()
     multibody = multibody_loading(scene, None) if "coupling" in scene.data else None
     model = build(scene, multibody=multibody)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from contact.assembly import assemble
-from contact.solver import ContactSolver, Effects, Equilibrium, _extrapolation_factor
+from contact.solver import ContactSolver, Effects, Equilibrium, _extrapolation_factor, _load_step
 from contact.structure import ContactSpace
 from tests.bench.bench_report import flat_on_flat
 
@@ -23,16 +23,18 @@ def flat():
     return case, ContactSpace(structure)
 
 
-def _run(case, space, effects: Effects, forget: bool = False):
-    """Forces (N) and Newton iterations of every increment of the case's history; with
-    ``forget`` the solver forgets its predictors before every increment."""
+def _run(case, space, effects: Effects, forget: bool = False, history=None, positions=None):
+    """Forces (N) and Newton iterations of every increment of the case's history (or of
+    ``history``, with the cycle ``positions`` of its increments); with ``forget`` the solver
+    forgets its predictors before every increment."""
     solver = ContactSolver(space, case.law)
     equilibrium, state = solver.initial_equilibrium(), case.initial_state(space.structure.n_points)
     forces, iterations = [], []
-    for amplitudes in case.history:
+    history = case.history if history is None else history
+    for amplitudes, position in zip(history, positions or [None] * len(history)):
         if forget:
             solver.recall_predictors({})
-        equilibrium, state, _, stats = solver.increment(equilibrium, state, amplitudes, effects)
+        equilibrium, state, _, stats = solver.increment(equilibrium, state, amplitudes, effects, position)
         forces.append(equilibrium.forces)
         iterations.append(stats.iterations)
     return np.array(forces), np.array(iterations)
@@ -68,6 +70,33 @@ def test_the_predictors_do_not_change_the_answer(flat):
     assert iterations[-8:].sum() < iterations_forgotten[-8:].sum()
 
 
+def _run_up(case, cycles: int = 10):
+    """The case's cycle with its stroke growing from 30 to 100 % over ``cycles`` cycles (a
+    vibration that runs up), and the (k, 4) position of every increment in its cycle."""
+    one_cycle = case.history[2:6]
+    history, positions = list(case.history[:2] * np.array([1.0, 0.3])), [None, None]
+    for c in range(cycles):
+        for k, amplitudes in enumerate(one_cycle, start=1):
+            history.append(amplitudes * np.array([1.0, 0.3 + 0.7 * c / (cycles - 1)]))
+            positions.append((k, 4))
+    return history, positions
+
+
+def test_a_running_up_cycle_is_recalled_by_its_position_in_the_cycle(flat):
+    """While the stroke grows, no load step repeats: keyed by its start and end amplitudes, no
+    cycle is ever recalled. Keyed by the increment's place in the cycle, the same point of the
+    last two cycles and their extrapolation are: fewer Newton iterations, the same answer."""
+    case, space = flat
+    history, positions = _run_up(case)
+    effects = Effects(cof_evolution=True)
+    by_amplitudes, iterations = _run(case, space, effects, history=history)
+    by_position, iterations_position = _run(case, space, effects, history=history, positions=positions)
+    scale = np.max(np.abs(by_amplitudes))
+    assert np.max(np.abs(by_position - by_amplitudes)) <= 1e-8 * scale
+    last = slice(-16, None)  # the last four cycles: gross slip at the stroke's ends
+    assert iterations[last].sum() >= 1.5 * iterations_position[last].sum(), (iterations, iterations_position)
+
+
 def test_extrapolation_factor_follows_the_wear_gap():
     before = np.array([0.0, 1e-3, 2e-3])
     step = np.array([1e-4, 2e-4, 0.0])
@@ -86,23 +115,27 @@ def test_the_predictor_memory_stays_bounded_under_a_load_that_never_repeats(flat
     for k in range(1, 400):
         amplitudes = np.array([1.0, 1e-6 * k])
         solved = Equilibrium(start.kinematics, start.control, start.forces, amplitudes)
-        solver._remember(start, solved, state)
+        solver._remember(_load_step(start.amplitudes, amplitudes), solved, state)
         start = solved
     assert len(solver._solved_at) <= 128
     # the newest level and step are kept
     assert any(v[0][0] is start for v in solver._solved_at.values())
 
 
-def test_the_predictor_memory_survives_a_checkpoint_bit_for_bit(flat):
+@pytest.mark.parametrize("by_position", [False, True], ids=["load steps", "cycle positions"])
+def test_the_predictor_memory_survives_a_checkpoint_bit_for_bit(flat, by_position):
     """A solver that takes up another's memory (a resumed run) solves the next cycle to the
-    same bits as the one that kept it."""
+    same bits as the one that kept it, whether its steps were known by their amplitudes or by
+    their place in the cycle."""
     case, space = flat
     effects = Effects(cof_evolution=True)
+    history, positions = (_run_up(case, cycles=6) if by_position
+                          else (case.history, [None] * len(case.history)))
     kept = ContactSolver(space, case.law)
     equilibrium, state = kept.initial_equilibrium(), case.initial_state(space.structure.n_points)
-    split = len(case.history) - 4  # before the last cycle
-    for amplitudes in case.history[:split]:
-        equilibrium, state, _, _ = kept.increment(equilibrium, state, amplitudes, effects)
+    split = len(history) - 4  # before the last cycle
+    for amplitudes, position in zip(history[:split], positions[:split]):
+        equilibrium, state, _, _ = kept.increment(equilibrium, state, amplitudes, effects, position)
     memory = kept.predictor_memory()
     assert memory["last"].size == len(kept._solved_at) and np.all(memory["before"] < memory["kinematics"].shape[0])
     resumed = ContactSolver(space, case.law)
@@ -112,8 +145,12 @@ def test_the_predictor_memory_survives_a_checkpoint_bit_for_bit(flat):
     ends = []
     for solver in (kept, resumed):
         e, s = equilibrium, state
-        for amplitudes in case.history[split:]:
-            e, s, _, stats = solver.increment(e, s, amplitudes, effects)
-            assert stats.iterations == 1  # the predictors were there
-        ends.append(e.forces)
-    assert np.array_equal(*ends)
+        iterations = []
+        for amplitudes, position in zip(history[split:], positions[split:]):
+            e, s, _, stats = solver.increment(e, s, amplitudes, effects, position)
+            iterations.append(stats.iterations)
+        # the predictors were there: one Newton step each in the steady cycle, and the
+        # resumed solver needs exactly what the one that kept them did
+        assert by_position or iterations == [1] * 4, iterations
+        ends.append((e.forces, iterations))
+    assert np.array_equal(ends[0][0], ends[1][0]) and ends[0][1] == ends[1][1]
