@@ -173,7 +173,7 @@ class ContactSolver:
         self.rigid_modes = _rigid_modes(space, self.stiffness_scale)
         self._last_failure = None  # (response, r_ctl, force scale, loaded) of the last failed attempt
         self._last_compliance = None  # (λ, W·λ) of the last residual
-        self._solved_at: dict[bytes, Equilibrium] = {}  # the last equilibrium at each load (cyclic predictor)
+        self._solved_at: dict[tuple, tuple] = {}  # the last equilibria at each load step and level (cyclic predictors)
         # S_q without the round-off stiffness (~1e-8 N/mm) of the rigid modes: left in, it
         # would let a body loaded beyond the friction limit find a spurious equilibrium
         # kilometres away instead of reporting the loss of tangential equilibrium.
