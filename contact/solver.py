@@ -230,7 +230,9 @@ class ContactSolver:
         for key, (latest, earlier) in self._solved_at.items():
             kind, *rest = key
             if kind == "position":
-                starts.append(nothing), ends.append(nothing), positions.append(rest)
+                starts.append(nothing)
+                ends.append(nothing)
+                positions.append(rest)
             else:
                 positions.append((-1, -1))
                 starts.append(np.frombuffer(rest[0], dtype=float) if kind == "step" else nothing)

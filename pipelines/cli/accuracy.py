@@ -28,12 +28,17 @@ def _parse_pairs(items: list[str], option: str) -> dict:
     return pairs
 
 
+def set_overrides(items: list[str]) -> dict:
+    """Scene overrides from ``--set KEY=VALUE`` options: {dotted key: TOML value}."""
+    return {key: _parse_value(value, f"--set {key}") for key, value in _parse_pairs(items, "--set").items()}
+
+
 def cmd_accuracy(args) -> int:
     """``fretwork study accuracy``: run the study, print the table (or JSON), write plot and JSON."""
     from pipelines.studies.accuracy import accuracy_study  # the study's modules load only when it runs
     from pipelines.studies.accuracy_report import plot_pareto, table_lines
 
-    overrides = {key: _parse_value(value, f"--set {key}") for key, value in _parse_pairs(args.set, "--set").items()}
+    overrides = set_overrides(args.set)
     sweeps = {key: [_parse_value(v, f"--knob {key}") for v in value.split(",")]
               for key, value in _parse_pairs(args.knob, "--knob").items()}
     for key, values in sweeps.items():

@@ -37,7 +37,7 @@ sys.path.insert(0, str(ROOT))
 
 from contact.linear import KrylovSettings  # noqa: E402
 from pipelines import scene as scenes  # noqa: E402
-from pipelines.cli.accuracy import _parse_pairs, _parse_value  # noqa: E402
+from pipelines.cli.accuracy import set_overrides  # noqa: E402
 from pipelines.build import build  # noqa: E402
 from pipelines.coupling import multibody_loading  # noqa: E402
 from pipelines.jobs.run import run_model  # noqa: E402
@@ -106,8 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     pin_process()  # as the command line does
     path = ROOT / "examples" / f"{args.scene}.toml"
-    extra = {key: _parse_value(value, f"--set {key}") for key, value in _parse_pairs(args.set, "--set").items()}
-    scene = scenes.load(path, {**overrides(path, args.size, args.cycles, args.solver), **extra})
+    scene = scenes.load(path, {**overrides(path, args.size, args.cycles, args.solver), **set_overrides(args.set)})
     start_cpu, start = time.process_time(), time.perf_counter()
     multibody = multibody_loading(scene, None) if "coupling" in scene.data else None
     model = build(scene, multibody=multibody)
