@@ -166,6 +166,9 @@ class SparseContactSpace(ContactSpace):
     def _form_compliance(self) -> None:
         pass  # W stays implicit
 
+    def _solve_contact(self, rhs: np.ndarray, wanted: np.ndarray | None) -> np.ndarray:
+        return self._Kcc.solve(rhs)  # one factor of all the bodies: solved whole
+
     @property
     def n_rows(self) -> int:
         return self.Gc.shape[0]

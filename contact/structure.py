@@ -121,10 +121,19 @@ class _BlockFactor:
         self.blocks = [position[block] for block in _diagonal_blocks(stiffness, index)]
         self.inverses = [_spd_inverse(stiffness[np.ix_(index[block], index[block])]) for block in self.blocks]
 
-    def solve(self, rhs: np.ndarray) -> np.ndarray:
-        out = np.empty_like(rhs, dtype=float)
+    def solve(self, rhs: np.ndarray, wanted: np.ndarray | None = None) -> np.ndarray:
+        """K⁻¹·rhs (rhs (n,) or (n, m)); with ``wanted`` (positions among the eliminated DOFs)
+        only the blocks that hold them are solved, the others left zero. A vector is
+        multiplied by the upper triangle of each inverse (:func:`symmetric_product`: half the
+        bytes read; at 2.5 mm on the counterweight's pads two 4,728-row inverses, 25 ms)."""
+        out = np.zeros_like(rhs, dtype=float)
+        holds = None
+        if wanted is not None:
+            holds = np.zeros(self.index.size, dtype=bool)
+            holds[wanted] = True
         for block, inverse in zip(self.blocks, self.inverses):
-            out[block] = inverse @ rhs[block]
+            if holds is None or holds[block].any():
+                out[block] = symmetric_product(inverse, rhs[block])
         return out
 
     def congruence(self, operator: sp.csr_matrix) -> np.ndarray:
@@ -364,17 +373,29 @@ class ContactSpace:
         """K_cc⁻¹·rhs (mm) for forces ``rhs`` (N) on the contact DOFs, body block by body block."""
         return self._Kcc.solve(rhs)
 
-    def displacements(self, control: np.ndarray, forces: np.ndarray, amplitudes: np.ndarray) -> np.ndarray:
-        """All retained displacements (n,) mm from control DOFs q and contact forces λ (N)."""
+    def displacements(self, control: np.ndarray, forces: np.ndarray, amplitudes: np.ndarray,
+                      dofs: np.ndarray | None = None) -> np.ndarray:
+        """All retained displacements (n,) mm from control DOFs q and contact forces λ (N), or
+        only those at ``dofs`` (retained-DOF indices), for which only the bodies that hold them
+        are solved (the damage observer's slave surface: one body of two)."""
         s = self.structure
         u = np.zeros(s.n_dofs)
         motion = self.pattern_motion @ amplitudes
         rhs = (self.pattern_force_c @ amplitudes - self._Kcp @ motion - self._Kcq @ control
                - self._GcT @ forces)
-        u[self.contact_dofs] = self._Kcc.solve(rhs)
+        wanted = None
+        if dofs is not None:
+            position = np.full(s.n_dofs, -1)
+            position[self.contact_dofs] = np.arange(self.contact_dofs.size)
+            wanted = position[dofs][position[dofs] >= 0]
+        u[self.contact_dofs] = self._solve_contact(rhs, wanted)
         u[self.control_dofs] = control
         u[self.prescribed] = motion
-        return u
+        return u if dofs is None else u[dofs]
+
+    def _solve_contact(self, rhs: np.ndarray, wanted: np.ndarray | None) -> np.ndarray:
+        """K_cc⁻¹·rhs (mm), exact at least at the positions ``wanted`` (None: everywhere)."""
+        return self._Kcc.solve(rhs, wanted)
 
     def external_forces(self, displacement: np.ndarray, forces: np.ndarray,
                         amplitudes: np.ndarray) -> np.ndarray:

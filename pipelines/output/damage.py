@@ -45,7 +45,7 @@ class DamageObserver(Observer):
     def increment(self, record: IncrementRecord) -> None:
         if record.phase != "preload":
             eq = record.equilibrium
-            displacement = self.space.displacements(eq.control, eq.forces, eq.amplitudes)[self.surface_dofs]
+            displacement = self.space.displacements(eq.control, eq.forces, eq.amplitudes, self.surface_dofs)
             per_point = eq.forces.reshape(len(self.area), -1) / self.area[:, None]
             self.tracker.record(displacement.reshape(-1, self.dim), per_point[:, 0], per_point[:, 1:])
         self.inner.increment(record)

@@ -54,6 +54,27 @@ def test_operators_equal_the_condensed_ones(spaces):
     assert _relative(sparse.compliance_of_change(rows, forces[rows]), dense.W[rows].T @ forces[rows]) < 1e-10
 
 
+def test_displacements_of_some_dofs_are_those_of_all(spaces):
+    """The damage observer asks for the slave surface's displacements only: the dense path then
+    solves the slave body's block alone, the sparse path the whole bodies; either way the
+    values are those of the full recovery (the dense path's to the bit)."""
+    case, dense, sparse = spaces
+    rng = np.random.default_rng(5)
+    amplitudes = np.array([1000.0, 1e-3])
+    for space in (dense, sparse):
+        forces, control = rng.normal(0.0, 10.0, space.n_rows), rng.normal(0.0, 1e-3, space.n_control)
+        whole = space.displacements(control, forces, amplitudes)
+        assert np.all(np.isfinite(whole)) and np.max(np.abs(whole)) > 0.0
+        for dofs in (np.arange(whole.size // 3),  # the first body's DOFs and a few of the other's
+                     np.concatenate([space.control_dofs, space.contact_dofs[-3:], space.prescribed[:2]])):
+            part = space.displacements(control, forces, amplitudes, dofs)
+            if space is dense:
+                assert np.array_equal(part, whole[dofs])
+            else:
+                assert _relative(part, whole[dofs]) < 1e-12
+    assert len(dense._Kcc.blocks) == 2  # a body block is skipped when no DOF of it is asked for
+
+
 @pytest.mark.parametrize("reference", ["diagonal", "tangent"])
 @pytest.mark.parametrize("opened", [0, 7])
 def test_newton_correction_equals_the_dense_solve(spaces, opened, reference):
