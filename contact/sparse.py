@@ -166,8 +166,9 @@ class SparseContactSpace(ContactSpace):
     def _form_compliance(self) -> None:
         pass  # W stays implicit
 
-    def _solve_contact(self, rhs: np.ndarray, wanted: np.ndarray | None) -> np.ndarray:
-        return self._Kcc.solve(rhs)  # one factor of all the bodies: solved whole
+    def solve_contact_block(self, rhs: np.ndarray, wanted: np.ndarray | None = None) -> np.ndarray:
+        """K_cc⁻¹·rhs (mm): one factor of all the bodies, solved whole whatever is ``wanted``."""
+        return self._Kcc.solve(rhs)
 
     @property
     def n_rows(self) -> int:

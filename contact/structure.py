@@ -369,9 +369,10 @@ class ContactSpace:
         """g_f (mm) and f_q (N) for a vector of pattern amplitudes."""
         return self.pattern_gf @ amplitudes, self.pattern_fq @ amplitudes
 
-    def solve_contact_block(self, rhs: np.ndarray) -> np.ndarray:
-        """K_cc⁻¹·rhs (mm) for forces ``rhs`` (N) on the contact DOFs, body block by body block."""
-        return self._Kcc.solve(rhs)
+    def solve_contact_block(self, rhs: np.ndarray, wanted: np.ndarray | None = None) -> np.ndarray:
+        """K_cc⁻¹·rhs (mm) for forces ``rhs`` (N) on the contact DOFs, body block by body block;
+        with ``wanted`` (positions among the contact DOFs) only the blocks that hold them."""
+        return self._Kcc.solve(rhs, wanted)
 
     def displacements(self, control: np.ndarray, forces: np.ndarray, amplitudes: np.ndarray,
                       dofs: np.ndarray | None = None) -> np.ndarray:
@@ -387,15 +388,12 @@ class ContactSpace:
         if dofs is not None:
             position = np.full(s.n_dofs, -1)
             position[self.contact_dofs] = np.arange(self.contact_dofs.size)
-            wanted = position[dofs][position[dofs] >= 0]
-        u[self.contact_dofs] = self._solve_contact(rhs, wanted)
+            wanted = position[dofs]
+            wanted = wanted[wanted >= 0]
+        u[self.contact_dofs] = self.solve_contact_block(rhs, wanted)
         u[self.control_dofs] = control
         u[self.prescribed] = motion
         return u if dofs is None else u[dofs]
-
-    def _solve_contact(self, rhs: np.ndarray, wanted: np.ndarray | None) -> np.ndarray:
-        """K_cc⁻¹·rhs (mm), exact at least at the positions ``wanted`` (None: everywhere)."""
-        return self._Kcc.solve(rhs, wanted)
 
     def external_forces(self, displacement: np.ndarray, forces: np.ndarray,
                         amplitudes: np.ndarray) -> np.ndarray:

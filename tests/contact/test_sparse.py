@@ -65,14 +65,21 @@ def test_displacements_of_some_dofs_are_those_of_all(spaces):
         forces, control = rng.normal(0.0, 10.0, space.n_rows), rng.normal(0.0, 1e-3, space.n_control)
         whole = space.displacements(control, forces, amplitudes)
         assert np.all(np.isfinite(whole)) and np.max(np.abs(whole)) > 0.0
-        for dofs in (np.arange(whole.size // 3),  # the first body's DOFs and a few of the other's
+        for dofs in (np.arange(whole.size // 3),  # the first third of the retained DOFs
+                     # control and prescribed DOFs and a few contact DOFs of the last body
                      np.concatenate([space.control_dofs, space.contact_dofs[-3:], space.prescribed[:2]])):
             part = space.displacements(control, forces, amplitudes, dofs)
             if space is dense:
                 assert np.array_equal(part, whole[dofs])
             else:
                 assert _relative(part, whole[dofs]) < 1e-12
-    assert len(dense._Kcc.blocks) == 2  # a body block is skipped when no DOF of it is asked for
+    # a body block none of whose DOFs is asked for is not solved
+    factor = dense._Kcc
+    assert len(factor.blocks) == 2
+    first, second = factor.blocks
+    rhs = rng.normal(0.0, 10.0, factor.index.size)
+    part = factor.solve(rhs, first[:1])
+    assert np.array_equal(part[first], factor.solve(rhs)[first]) and not np.any(part[second])
 
 
 @pytest.mark.parametrize("reference", ["diagonal", "tangent"])
