@@ -358,10 +358,11 @@ def _widen(columns: np.ndarray, values: np.ndarray, width: int) -> tuple[np.ndar
 def mortar_pairing(slave, master, projection, segments: MortarSegments | None = None):
     """The mortar :class:`contact.interface.Pairing` of two surfaces.
 
-    projection: the node-to-segment pairing of the same surfaces; slave nodes the master does
-    not cover at all keep it (with their full tributary area), so that a slave surface that
-    overhangs the master behaves as before. Normals are the master normals averaged over each
-    node's segments; the initial overclosure is the mortar-weighted gap along them.
+    projection: the node-to-segment pairing of the same surfaces, or a function that forms it
+    (called only if some slave node needs it); slave nodes the master does not cover at all
+    keep it (with their full tributary area), so that a slave surface that overhangs the
+    master behaves as before. Normals are the master normals averaged over each node's
+    segments; the initial overclosure is the mortar-weighted gap along them.
     """
     from contact.interface import Pairing, tangent_frame
 
@@ -371,17 +372,21 @@ def mortar_pairing(slave, master, projection, segments: MortarSegments | None = 
     covered = (area > 1e-9 * slave.area) & (norm > 0.0)
     slave_nodes, slave_weights = padded_rows(D, area)
     master_nodes, master_weights = padded_rows(M, area)
-    width = max(master_nodes.shape[1], projection.master_nodes.shape[1])
+    # a projection's rows hold one master segment (2D) or triangle (3D): dim nodes
+    width = max(master_nodes.shape[1], slave.dim)
     master_nodes, master_weights = _widen(master_nodes, master_weights, width)
-    fallback_nodes, fallback_weights = _widen(projection.master_nodes, projection.weights, width)
-    identity = np.zeros_like(slave_weights)
-    identity[:, 0] = 1.0
-    keep = covered[:, None]
-    slave_nodes = np.where(keep, slave_nodes, np.arange(area.size)[:, None])
-    slave_weights = np.where(keep, slave_weights, identity)
-    master_nodes = np.where(keep, master_nodes, fallback_nodes)
-    master_weights = np.where(keep, master_weights, fallback_weights)
-    normal = np.where(keep, -normal_sum / np.where(norm > 0.0, norm, 1.0)[:, None], projection.normal)
+    normal = -normal_sum / np.where(norm > 0.0, norm, 1.0)[:, None]
+    if not covered.all():
+        projection = projection() if callable(projection) else projection
+        fallback_nodes, fallback_weights = _widen(projection.master_nodes, projection.weights, width)
+        identity = np.zeros_like(slave_weights)
+        identity[:, 0] = 1.0
+        keep = covered[:, None]
+        slave_nodes = np.where(keep, slave_nodes, np.arange(area.size)[:, None])
+        slave_weights = np.where(keep, slave_weights, identity)
+        master_nodes = np.where(keep, master_nodes, fallback_nodes)
+        master_weights = np.where(keep, master_weights, fallback_weights)
+        normal = np.where(keep, normal, projection.normal)
     position = (np.einsum("nk,nkd->nd", slave_weights, slave.coordinates[slave_nodes])
                 - np.einsum("nk,nkd->nd", master_weights, master.coordinates[master_nodes]))
     return Pairing(slave=slave, master=master, master_nodes=master_nodes, weights=master_weights,

@@ -151,3 +151,27 @@ def test_unknown_pairing_method_is_an_input_error():
     pairing = _blocks((7, 7), (7, 7)).assembly.pairing
     with pytest.raises(Exception, match="pairing must be one of"):
         pair_surfaces(pairing.slave, pairing.master, method="surface_to_surface")
+
+
+@pytest.mark.parametrize("shift", [0.0, 4.0])
+def test_the_projection_is_formed_only_for_slave_nodes_the_master_does_not_cover(shift):
+    """A finite-sliding re-pairing forms the node-to-segment projection only when some slave
+    node needs it (contact/interface.py, ``pair_surfaces``): the pairing is that of the
+    projection formed first, with the master in place (every node covered) and slid 4 mm off
+    (the overhanging nodes keep the projection's weights and their own tributary area)."""
+    from dataclasses import fields, replace
+
+    from contact.interface import pair_node_to_segment
+    from contact.mortar import mortar_pairing
+
+    pairing = _blocks((7, 7), (13, 11)).assembly.pairing
+    master = replace(pairing.master, coordinates=pairing.master.coordinates + [shift, 0.0, 0.0])
+    lazy = pair_surfaces(pairing.slave, master, method="mortar")
+    eager = mortar_pairing(pairing.slave, master, pair_node_to_segment(pairing.slave, master))
+    for field in fields(lazy):
+        a, b = getattr(lazy, field.name), getattr(eager, field.name)
+        assert a is b or np.array_equal(a, b) if isinstance(a, np.ndarray) else a == b, field.name
+    D, _, _ = mortar_matrices(pairing.slave, master)
+    overhanging = np.asarray(D.sum(axis=1)).ravel() <= 1e-9 * pairing.slave.area
+    assert overhanging.any() == (shift > 0.0)
+    assert np.array_equal(lazy.point_area[overhanging], pairing.slave.area[overhanging])
