@@ -68,6 +68,26 @@ def overrides(path: Path, size: float | None, cycles: int | None, solver: str = 
 FIELDS = ("pressure", "shear", "cof")
 
 
+def short_extreme_arguments(parser: argparse.ArgumentParser, size: float) -> None:
+    """The options of the probes that run a short counterweight extreme: --size, --cof, --wear."""
+    parser.add_argument("--size", type=float, default=size, help="contact mesh size, mm")
+    parser.add_argument("--cof", type=int, default=20, help="COF cycles")
+    parser.add_argument("--wear", type=int, default=10, help="wear blocks")
+
+
+def short_extreme(args: argparse.Namespace):
+    """The model of ``examples/counterweight_extreme.toml`` at ``args.size`` mm with ``args.cof`` COF
+    cycles (the vibration's run-up within them) and ``args.wear`` wear blocks, no checkpoints,
+    in a process pinned to one BLAS thread."""
+    pin_process()
+    path = ROOT / "examples" / "counterweight_extreme.toml"
+    changes = overrides(path, args.size, None)
+    changes.update({"procedure.cof_cycles": args.cof, "procedure.wear_cycles": args.wear,
+                    "procedure.checkpoint_every": 0})
+    changes.update(run_up_within(scenes.load(path), args.cof))
+    return build(scenes.load(path, changes))
+
+
 def saved_fields(results: h5py.File) -> dict:
     """What ``--fields`` keeps of a results file: the final pressure, shear and COF; the same
     fields at the end of the first phase (``first_phase_*``, when a field snapshot was written

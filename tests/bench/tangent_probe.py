@@ -27,11 +27,7 @@ sys.path.insert(0, str(ROOT / "tests" / "bench"))
 
 import contact.linear as linear  # noqa: E402
 import scene_run  # noqa: E402
-from pipelines import scene as scenes  # noqa: E402
-from pipelines.build import build  # noqa: E402
 from pipelines.jobs.run import run_model  # noqa: E402
-from pipelines.studies.knobs import run_up_within  # noqa: E402
-from reduction.threads import pin_process  # noqa: E402
 
 THRESHOLDS = (1e-4, 1e-3, 1e-2, 3e-2)
 
@@ -59,17 +55,9 @@ def probe(rows: list, counters: list):
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--size", type=float, default=2.5, help="contact mesh size, mm")
-    parser.add_argument("--cof", type=int, default=20, help="COF cycles")
-    parser.add_argument("--wear", type=int, default=10, help="wear blocks")
+    scene_run.short_extreme_arguments(parser, size=2.5)
     args = parser.parse_args(argv)
-    pin_process()
-    path = ROOT / "examples" / "counterweight_extreme.toml"
-    overrides = scene_run.overrides(path, args.size, None)
-    overrides.update({"procedure.cof_cycles": args.cof, "procedure.wear_cycles": args.wear,
-                      "procedure.checkpoint_every": 0})
-    overrides.update(run_up_within(scenes.load(path), args.cof))
-    model = build(scenes.load(path, overrides))
+    model = scene_run.short_extreme(args)
     rows, counters = [], []
     probe(rows, counters)
     with tempfile.TemporaryDirectory() as out:
