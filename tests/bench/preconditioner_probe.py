@@ -20,7 +20,8 @@ of an earlier tangent T₀), then again, on the same right-hand side and toleran
 
 The run itself goes as shipped; the probe prints, per GMRES tolerance, the solves and the
 Krylov iterations of the shipped preconditioner and of each variant (for *recycled*, the
-preconditioned ones, and in brackets the recycled directions).
+preconditioned ones, and in brackets the recycled directions), and how W's diagonal compares
+with the stick points' stiffness (W_ii·T_ii, normal and tangential).
 """
 
 from __future__ import annotations
@@ -48,6 +49,10 @@ def scaled(solver, factor, blocks, previous):
     correction = np.broadcast_to(np.eye(dim), blocks.shape).copy()
     invertible = (np.linalg.cond(blocks) < 1e12) & (np.linalg.cond(factor.blocks) < 1e12)
     correction[invertible] = np.linalg.solve(blocks[invertible], factor.blocks[invertible])
+    # how stiff the stick points are against the bodies: W's diagonal times the tangent's
+    rows = linear._rows(factor.points[invertible], dim).reshape(-1, dim)
+    product = solver.space.W[rows, rows] * np.diagonal(blocks[invertible], axis1=1, axis2=2)
+    STIFFNESS.append(product)
 
     def precondition(vector):
         x = factor.precondition(vector)
@@ -94,6 +99,9 @@ def recycled(solver, factor, blocks, previous):
 
     return precondition, offered
 
+
+#: W_ii·T_ii at the stick points of every solve, (points, dim): normal, tangential
+STIFFNESS: list = []
 
 VARIANTS = {"scaled": scaled, "diagonal": diagonal, "recycled": recycled}
 
@@ -157,6 +165,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"GMRES to {tolerance:g}: {len(solves)} solves; Krylov iterations (per solve): shipped "
               f"{solves[:, 1].sum():.0f} ({solves[:, 1].mean():.2f}), {counts} "
               f"[{solves[:, 2].mean():.2f} directions recycled]")
+    stiffness = np.concatenate(STIFFNESS)
+    for k, name in enumerate(("normal", "tangential")):
+        low, median, high = np.percentile(stiffness[:, min(k, stiffness.shape[1] - 1)], [10, 50, 90])
+        print(f"W·T on the {name} diagonal of the stick points: 10th percentile {low:.3g}, "
+              f"median {median:.3g}, 90th {high:.3g}")
     return 0
 
 
