@@ -184,6 +184,7 @@ def pair_surfaces(slave: Surface, master: Surface, *, method: str = "auto",
         raise InputError(f"{name}: pairing must be one of {', '.join(PAIRING_METHODS)}, got {method!r}")
     from contact.mortar import mortar_pairing
 
+    _check_dimensions(slave, master, name)
     if method == "mortar" and search_distance == np.inf:
         # nothing to check and nothing to choose: the projection is only the fallback of
         # slave nodes the master does not cover, formed if there are any (a finite-sliding
@@ -193,6 +194,11 @@ def pair_surfaces(slave: Surface, master: Surface, *, method: str = "auto",
     if method == "node_to_segment" or (method == "auto" and meshes_match(projection)):
         return projection
     return mortar_pairing(slave, master, projection)
+
+
+def _check_dimensions(slave: Surface, master: Surface, name: str) -> None:
+    if slave.dim != master.dim:
+        raise InputError(f"{name}: slave surface is {slave.dim}D but master surface is {master.dim}D")
 
 
 def meshes_match(projection: Pairing, tolerance: float = 1e-6) -> bool:
@@ -209,8 +215,7 @@ def pair_node_to_segment(slave: Surface, master: Surface, *, search_distance: fl
     search_distance (mm): slave nodes farther than this from the master are an input error,
     so a misplaced surface is reported instead of silently producing open contact points.
     """
-    if slave.dim != master.dim:
-        raise InputError(f"{name}: slave surface is {slave.dim}D but master surface is {master.dim}D")
+    _check_dimensions(slave, master, name)
     dim = slave.dim
     if dim == 2:
         facets = master.facets

@@ -175,3 +175,17 @@ def test_the_projection_is_formed_only_for_slave_nodes_the_master_does_not_cover
     overhanging = np.asarray(D.sum(axis=1)).ravel() <= 1e-9 * pairing.slave.area
     assert overhanging.any() == (shift > 0.0)
     assert np.array_equal(lazy.point_area[overhanging], pairing.slave.area[overhanging])
+
+
+@pytest.mark.parametrize("method", ["mortar", "node_to_segment", "auto"])
+def test_surfaces_of_different_dimensions_are_an_input_error(method):
+    """A 2D slave and a 3D master are refused with one message whichever pairing is asked for
+    (the mortar pairing forms no projection, which would have said it)."""
+    from dataclasses import replace
+
+    from reduction.errors import InputError
+
+    pairing = _blocks((7, 7), (7, 7)).assembly.pairing
+    flat = replace(pairing.slave, coordinates=pairing.slave.coordinates[:, :2])
+    with pytest.raises(InputError, match="slave surface is 2D but master surface is 3D"):
+        pair_surfaces(flat, pairing.master, method=method)
