@@ -193,7 +193,7 @@ def pair_surfaces(slave: Surface, master: Surface, *, method: str = "auto",
     projection = pair_node_to_segment(slave, master, search_distance=search_distance, name=name)
     if method == "node_to_segment" or (method == "auto" and meshes_match(projection)):
         return projection
-    return mortar_pairing(slave, master, projection)
+    return mortar_pairing(slave, master, lambda: projection)
 
 
 def _check_dimensions(slave: Surface, master: Surface, name: str) -> None:

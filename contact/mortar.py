@@ -358,8 +358,8 @@ def _widen(columns: np.ndarray, values: np.ndarray, width: int) -> tuple[np.ndar
 def mortar_pairing(slave, master, projection, segments: MortarSegments | None = None):
     """The mortar :class:`contact.interface.Pairing` of two surfaces.
 
-    projection: the node-to-segment pairing of the same surfaces, or a function that forms it
-    (called only if some slave node needs it); slave nodes the master does not cover at all
+    projection: a function that returns the node-to-segment pairing of the same surfaces,
+    called only if some slave node needs it: slave nodes the master does not cover at all
     keep it (with their full tributary area), so that a slave surface that overhangs the
     master behaves as before. Normals are the master normals averaged over each node's
     segments; the initial overclosure is the mortar-weighted gap along them.
@@ -377,7 +377,7 @@ def mortar_pairing(slave, master, projection, segments: MortarSegments | None = 
     master_nodes, master_weights = _widen(master_nodes, master_weights, width)
     normal = -normal_sum / np.where(norm > 0.0, norm, 1.0)[:, None]
     if not covered.all():
-        projection = projection() if callable(projection) else projection
+        projection = projection()
         fallback_nodes, fallback_weights = _widen(projection.master_nodes, projection.weights, width)
         identity = np.zeros_like(slave_weights)
         identity[:, 0] = 1.0

@@ -109,12 +109,20 @@ VARIANTS = {"scaled": scaled, "diagonal": diagonal, "recycled": recycled}
 def probe(rows: list) -> None:
     """Wrap the Krylov solve: after the shipped one, solve again with each variant."""
     bordered = linear.NewtonLinearSolver._bordered_product
-    built: dict = {}
-    kept: list = []  # the factors whose diagonal preconditioner is in ``built``
+    diagonals: dict = {}  # id → (factor, its diagonal preconditioner), while the pool keeps it
+    last: list = []  # the previous solve's preconditioned directions
 
     def recorded_bordered(solver, closed_blocks, W_cc, E_c):
         solver._probed_blocks = closed_blocks
         return bordered(solver, closed_blocks, W_cc, E_c)
+
+    def diagonal_of(solver, factor):
+        pooled = {id(kept) for kept in solver._pool.factors}
+        for key in [key for key in diagonals if key not in pooled]:
+            del diagonals[key]
+        if id(factor) not in diagonals:
+            diagonals[id(factor)] = (factor, diagonal(solver, factor, solver._probed_blocks, last))
+        return diagonals[id(factor)][1]
 
     def compared_krylov(solver, matvec, factor, r_closed, r_ctl, tolerance):
         directions = []
@@ -126,21 +134,13 @@ def probe(rows: list) -> None:
         rhs = np.concatenate([-r_closed, -solver._control_scale * r_ctl])
         solution, iterations = linear._gmres(matvec, recorded, rhs, tolerance, solver.settings.max_iterations)
         row = [tolerance, iterations, 0]
-        previous = built.get("directions", [])
         for name, make in VARIANTS.items():
-            if name == "diagonal":  # formed once per factor and kept while the pool keeps it
-                if factor not in kept:
-                    kept[:] = [f for f in kept if any(f is g for g in solver._pool.factors)]
-                    built[id(factor)] = make(solver, factor, solver._probed_blocks, previous)
-                    kept.append(factor)
-                    for key in [k for k in built if isinstance(k, int) and all(id(f) != k for f in kept)]:
-                        del built[key]
-                precondition, offered = built[id(factor)]
-            else:
-                precondition, offered = make(solver, factor, solver._probed_blocks, previous)
+            # the diagonal one is formed once per factor, as a pool would keep it
+            precondition, offered = (diagonal_of(solver, factor) if name == "diagonal"
+                                     else make(solver, factor, solver._probed_blocks, last))
             row.append(linear._gmres(matvec, precondition, rhs, tolerance, 200)[1] - len(offered))
-            row[2] = max(row[2], len(offered))
-        built["directions"] = directions
+            row[2] += len(offered)
+        last[:] = directions
         rows.append(row)
         return solution, iterations
 
