@@ -93,7 +93,7 @@ def _description_root(table: PlaybackTable, fmi_version: int, identifier: str, t
             "fmiVersion": "3.0" if fmi3 else "2.0",
             "modelName": identifier,
             ("instantiationToken" if fmi3 else "guid"): token,
-            "description": f"Playback of {len(table.names)} load history outputs sampled at {table.time.size} times",
+            "description": _description(table),
             "generationTool": "fretwork",
             "generationDateAndTime": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "variableNamingConvention": "structured",
@@ -116,6 +116,12 @@ def _description_root(table: PlaybackTable, fmi_version: int, identifier: str, t
         for name in PLAYER_SOURCES + FMI_SOURCES[2]:
             ET.SubElement(files, "File", {"name": name})
     return root
+
+
+def _description(table: PlaybackTable) -> str:
+    """What the FMU plays: how many outputs, and for a coupled run's histories, their scaling."""
+    text = f"Playback of {len(table.names)} load history outputs sampled at {table.time.size} times"
+    return text if table.scaling is None else f"{text}, {table.scaling.describe()}"
 
 
 def _add_units(root: ET.Element, table: PlaybackTable) -> None:

@@ -4,7 +4,10 @@ Signals come from the ``/histories`` group (one output per component, named and 
 the results file) of either results file that holds one: ``fretwork mbs``'s ``run.h5`` (every
 CW over the whole run) or a coupled ``fretwork run``'s ``results.h5`` (the CW that loads the
 contact, over the steady part of the multibody run; :mod:`pipelines.output.results`). A run's
-output folder stands for its ``results.h5``. The table (``resources/histories.bin``) is laid out as in template/player.c.
+output folder stands for its ``results.h5``. A coupled run's histories are played as its load
+cycle used them, scaled to its stated wing amplitude (:mod:`pipelines.fmu.scaling`). Files of
+another kind (a sweep, an interface-histories file) are refused, naming what they are and which
+command reads them. The table (``resources/histories.bin``) is laid out as in template/player.c.
 Units follow the results file (fretwork uses mm, N, MPa, t, s, mJ).
 """
 
@@ -21,6 +24,8 @@ from typing import Sequence
 import h5py
 import numpy as np
 
+from mbs import histories_file
+from pipelines.fmu.scaling import LoadScaling, load_scaling
 from reduction.errors import InputError
 
 
@@ -32,6 +37,13 @@ TOKEN_SIZE = 64
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 # Characters FMI allows inside a quoted ('...') structured name.
 _QUOTED_NAME = re.compile(r"[A-Za-z0-9_!#$%&()*+,\-./:;<=>?@\[\]^{}|~ ]+\Z")
+#: fretwork files that hold no histories to play, by their format tag: what they are, what reads them
+OTHER_KINDS = {
+    "fretwork-sweep": "a speed sweep of `fretwork sweep` (wing amplitudes and the Campbell diagram per engine "
+                      "speed), which `fretwork report` reads from its folder",
+    histories_file.FORMAT: "an interface-histories file (docs/histories_format.md), which a coupled scene reads "
+                           "through its [coupling] histories key",
+}
 
 
 @dataclass(frozen=True)
@@ -41,6 +53,7 @@ class PlaybackTable:
     time: (n,) strictly increasing sample times, s.
     values: (n, m) output values at the samples, in each output's unit.
     names, units, descriptions: (m,) FMI variable name, unit ('' if none) and description.
+    scaling: how a coupled run scaled the histories (values are scaled), None if played as stored.
     """
 
     time: np.ndarray
@@ -48,10 +61,12 @@ class PlaybackTable:
     names: tuple[str, ...]
     units: tuple[str, ...]
     descriptions: tuple[str, ...]
+    scaling: LoadScaling | None = None
 
 
 def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] | None = None) -> PlaybackTable:
-    """Read and check the ``/histories`` group; flatten (n, k) signals to k scalar outputs.
+    """Read and check the ``/histories`` group; flatten (n, k) signals to k scalar outputs, scaled
+    as a coupled run's load cycle used them (:mod:`pipelines.fmu.scaling`).
     ``results_path``: a results file, or a run's output folder (its ``results.h5``)."""
     results_path = Path(results_path)
     if results_path.is_dir() and (results_path / "results.h5").is_file():
@@ -63,6 +78,7 @@ def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] 
     except OSError as error:
         raise InputError(f"results file {results_path} is not a readable HDF5 file ({error})") from None
     with results:
+        _refuse_other_kinds(results, results_path)
         if "histories" not in results or not isinstance(results["histories"], h5py.Group):
             raise InputError(
                 f"results file {results_path} has no /histories group: the multibody histories are in the "
@@ -73,9 +89,12 @@ def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] 
         time = _read_time(histories, results_path)
         available = [name for name, item in histories.items() if name != "time" and isinstance(item, h5py.Dataset)]
         selected = _select_signals(signals, available, results_path)
+        scaling = load_scaling(results, time, results_path)
         columns, names, units, descriptions = [], [], [], []
         for signal in selected:
             data = _read_signal(histories[signal], signal, time)
+            if scaling is not None:
+                data = scaling.apply(time, data)
             unit = _text_attribute(histories[signal], "units")
             description = _text_attribute(histories[signal], "description")
             outputs = _outputs_of(histories[signal], signal, data.shape[1])
@@ -92,7 +111,21 @@ def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] 
         names=tuple(names),
         units=tuple(units),
         descriptions=tuple(descriptions),
+        scaling=scaling,
     )
+
+
+def _refuse_other_kinds(results: h5py.File, results_path: Path) -> None:
+    """InputError for a fretwork file of a kind that holds no histories to play back."""
+    tag = results.attrs.get("fretwork_format", results.attrs.get("format"))
+    tag = tag.decode() if isinstance(tag, bytes) else tag
+    # sweeps written before they had their own tag carry the results tag
+    if tag == "fretwork-results" and "sweep" in results and "histories" not in results:
+        tag = "fretwork-sweep"
+    if tag in OTHER_KINDS:
+        raise InputError(f"{results_path} is {OTHER_KINDS[tag]}, not a run's results: `fretwork export-fmu` plays "
+                         "the /histories of the run.h5 of `fretwork mbs` or of the results.h5 of a coupled "
+                         "`fretwork run`")
 
 
 def _read_time(histories: h5py.Group, results_path: Path) -> np.ndarray:

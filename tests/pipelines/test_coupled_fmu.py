@@ -1,5 +1,6 @@
 """A coupled run's results.h5 holds the multibody histories that drive its loads, in the layout
-of ``fretwork mbs``, and ``fretwork export-fmu`` turns them into an FMU that plays them back."""
+of ``fretwork mbs``, and ``fretwork export-fmu`` turns them into an FMU that plays them back as the
+run's load cycle used them: scaled to the stated wing amplitude (``fretwork mbs``'s run.h5 as it is)."""
 
 from pathlib import Path
 
@@ -8,12 +9,15 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from mbs.loading import MultibodyLoading
+from mbs.loading import MultibodyLoading, cycle_loading, harmonic_fit
+from mbs.parameters import ModelParams, SolverParams
 from mbs.results import MODAL_UNITS, write_loading_histories
+from mbs.run import run_model
 from pipelines import scene as scenes
 from pipelines import stages
 from pipelines.cli.main import main
 from pipelines.coupling import multibody_loading
+from pipelines.fmu.export import export_fmu
 from pipelines.fmu.table import read_playback_table
 from pipelines.jobs.run import run_scene
 
@@ -32,14 +36,31 @@ SIGNALS = {"cw1_frame_acceleration": ("frame_acceleration", "mm/s^2"),
 
 
 @pytest.fixture(scope="module")
-def coupled(tmp_path_factory):
-    """(output folder, the multibody loading the run used, the run's summary) of the coupled scene at
+def stage_cache(tmp_path_factory):
+    return stages.StageCache(tmp_path_factory.mktemp("stage-cache"))
+
+
+def run_coupled(scene_path, out, cache):
+    """(output folder, the multibody loading the run used, the run's summary) of a coupled scene at
     its cheapest."""
-    cache = stages.StageCache(tmp_path_factory.mktemp("stage-cache"))
-    scene = scenes.load(SCENE, CHEAPEST)
-    out = tmp_path_factory.mktemp("coupled")
+    scene = scenes.load(scene_path, CHEAPEST)
     outcome = run_scene(scene, out, progress=False, plots=False, cache=cache)
     return out, multibody_loading(scene, cache), outcome.summary
+
+
+@pytest.fixture(scope="module")
+def coupled(tmp_path_factory, stage_cache):
+    """The coupled scene (a wing_period load cycle) at its cheapest."""
+    return run_coupled(SCENE, tmp_path_factory.mktemp("coupled"), stage_cache)
+
+
+@pytest.fixture(scope="module")
+def coupled_revolution(tmp_path_factory, stage_cache):
+    """The coupled scene with a revolution load cycle (the same multibody run) at its cheapest."""
+    folder = tmp_path_factory.mktemp("revolution")
+    scene = folder / "revolution.toml"
+    scene.write_text(f'[scene]\nbase = "{SCENE}"\nname = "revolution"\n\n[coupling]\ncycle = "revolution"\n')
+    return run_coupled(scene, folder / "out", stage_cache)
 
 
 def test_the_run_holds_the_driving_histories_in_the_mbs_layout(coupled):
@@ -63,6 +84,7 @@ def test_the_run_holds_the_driving_histories_in_the_mbs_layout(coupled):
 
 
 def test_export_fmu_plays_a_coupled_run_back(coupled, tmp_path, capsys):
+    """The FMU plays the table of the run's histories (as the run used them), exact at the samples."""
     out, loading, _ = coupled
     fmu = tmp_path / "loads.fmu"
     assert main(["export-fmu", str(out), "--signals", "cw1_wing_torsion,cw1_frame_acceleration",
@@ -75,8 +97,8 @@ def test_export_fmu_plays_a_coupled_run_back(coupled, tmp_path, capsys):
     step = float(np.median(np.diff(time)))
     result = simulate_fmu(str(fmu), start_time=time[0], stop_time=time[-1], output_interval=step / 4)
     played = result["time"]
-    expected = {"cw1_wing_torsion": loading.wing_torsion,
-                **{name: loading.frame_acceleration[:, k] for k, name in enumerate(outputs[1:])}}
+    table = read_playback_table(out, ["cw1_wing_torsion", "cw1_frame_acceleration"])
+    expected = {name: table.values[:, k] for k, name in enumerate(outputs)}
     nearest = np.abs(played[:, None] - time[None, :]).argmin(axis=1)
     on_sample = np.abs(played - time[nearest]) <= 1e-12 * time[-1]
     assert on_sample.sum() >= time.size // 2  # the output grid lands on the samples
@@ -87,6 +109,75 @@ def test_export_fmu_plays_a_coupled_run_back(coupled, tmp_path, capsys):
                                    atol=1e-9 * scale, err_msg=name)
         np.testing.assert_allclose(result[name], np.interp(played, time, values), rtol=0, atol=1e-9 * scale,
                                    err_msg=name)
+
+
+@pytest.mark.parametrize("run", ["coupled", "coupled_revolution"])
+def test_the_fmu_of_a_coupled_run_swings_the_wing_by_the_stated_amplitude(run, request, tmp_path):
+    out, loading, summary = request.getfixturevalue(run)
+    stated, scale = summary["wing_amplitude_mm"], summary["vibration_scale"]
+    assert scale > 2.0  # the scene states more than the multibody amplitude: unscaled playback would fail
+    fmu = tmp_path / "wing.fmu"
+    export_fmu(out, fmu, ["cw1_wing_torsion"])
+    time = loading.time
+    step = float(np.median(np.diff(time)))
+    played = simulate_fmu(str(fmu), start_time=time[0], stop_time=time[-1], output_interval=step / 4)
+    half_swing = 0.5 * np.ptp(played["cw1_wing_torsion"])
+    if summary["load_cycle"] == "wing_period":
+        # the run's wing torsion is a sinusoid; its samples miss its peaks by at most this much
+        tolerance = stated * (1.0 - np.cos(np.pi * summary["load_cycle_frequency_hz"] * step))
+    else:
+        tolerance = 1e-12 * stated
+    assert abs(half_swing - stated) <= tolerance + 1e-12 * stated
+    description = read_model_description(str(fmu)).description
+    assert f"scaled by {scale:.6g}" in description and f"stated wing amplitude {stated:.6g} mm" in description
+    assert summary["load_cycle"] in description
+
+
+#: load-cycle pattern -> (signal under /histories, column)
+CYCLE_SIGNALS = {**{f"frame_a{axis}": ("cw1_frame_acceleration", k) for k, axis in enumerate("xyz")},
+                 **{f"alpha_{axis}": ("cw1_angular_acceleration", k) for k, axis in enumerate("xyz")},
+                 **{f"mode_{k + 1}": ("cw1_modal_acceleration", k) for k in range(CHEAPEST["mbs.n_modes"])},
+                 "wing_mode": ("cw1_wing_torsion", 0)}
+
+
+@pytest.mark.parametrize("run", ["coupled", "coupled_revolution"])
+def test_the_fmu_plays_the_load_cycle_the_run_used(run, request):
+    """At the times of the run's load cycle (mbs.loading.cycle_loading), the played histories are
+    the cycle's pattern amplitudes."""
+    out, loading, summary = request.getfixturevalue(run)
+    cycle = cycle_loading(loading, summary["load_cycle"], summary["wing_amplitude_mm"], 360)
+    phases = np.arange(1, 361) / 360
+    time = loading.time
+    step = float(np.median(np.diff(time)))
+    if cycle.cycle == "revolution":
+        at = time[-1] - loading.revolution_period + phases * loading.revolution_period
+        interpolation = 0.0
+    else:
+        frequency = cycle.frequency_hz
+        _, cosine, sine = harmonic_fit(time, loading.wing_torsion, frequency)
+        at = time[0] + np.mod(phases - np.arctan2(cosine, sine) / (2 * np.pi), 1.0) / frequency
+        # linear interpolation of a sinusoid between samples: at most (pi f dt)^2 / 2 of its amplitude
+        interpolation = 0.5 * (np.pi * frequency * step) ** 2
+    table = read_playback_table(out)
+    for pattern, (signal, column) in CYCLE_SIGNALS.items():
+        names = [name for name in table.names if name == signal or name.startswith(signal + ".")]
+        values = table.values[:, table.names.index(names[column])]
+        expected = cycle.tables[pattern]
+        swing = np.ptp(expected)
+        np.testing.assert_allclose(np.interp(at, time, values), expected, rtol=0,
+                                   atol=interpolation * swing + 1e-9 * np.abs(expected).max(), err_msg=pattern)
+
+
+def test_the_fmu_of_an_mbs_run_plays_its_histories_as_they_are(tmp_path):
+    params = ModelParams(n_modes=2, solver=SolverParams(revolutions=2.0, time_step=1e-4))
+    results = run_model(params, tmp_path).results_file
+    fmu = export_fmu(results, tmp_path / "mbs.fmu", ["cw1_wing_torsion", "cw1_frame_acceleration"])
+    table = read_playback_table(results, ["cw1_wing_torsion", "cw1_frame_acceleration"])
+    with h5py.File(results) as file:
+        stored = np.column_stack([file["histories/cw1_wing_torsion"][()], file["histories/cw1_frame_acceleration"][()]])
+    assert table.scaling is None and np.array_equal(table.values, stored)
+    assert read_model_description(str(fmu)).description == (
+        f"Playback of 4 load history outputs sampled at {table.time.size} times")
 
 
 def test_export_fmu_of_an_uncoupled_run_says_where_histories_are(coarse_cylinder, tmp_path, capsys):

@@ -16,6 +16,7 @@ from fmpy.validation import validate_fmu
 
 from pipelines.fmu.cli import add_export_fmu_parser, main_export
 from pipelines.fmu.export import SourceOnlyFmuWarning, export_fmu
+from pipelines.fmu.table import read_playback_table
 from reduction.errors import InputError
 
 OUTPUT_INTERVAL = 1.0 / 256.0
@@ -293,6 +294,52 @@ def test_bad_input_raises_and_leaves_no_file(case, history, tmp_path):
         export_fmu(tmp_path / "bad.h5", output, **options)
     assert not output.exists()
     assert not output.parent.exists() or list(output.parent.iterdir()) == []
+
+
+@pytest.mark.parametrize("cycle", ["wing_period", "revolution"])
+def test_a_scaled_run_plays_its_histories_as_its_load_cycle_used_them(cycle, tmp_path):
+    """A wing torsion of a 400 Hz and a 1200 Hz part, 0.1 s at 750 rpm (1.25 revolutions): the
+    wing_period cycle keeps the mean and the scaled 400 Hz harmonic; the revolution cycle scales
+    the whole signal about its mean over the last revolution (the last 0.08 s)."""
+    time = np.arange(2000) * 5e-5
+    torsion = 0.01 + 0.002 * np.sin(2 * np.pi * 400 * time) + 0.001 * np.sin(2 * np.pi * 1200 * time)
+    path = write_results(tmp_path / "results.h5", time, {"cw1_wing_torsion": (torsion, {"units": "mm"})})
+    with h5py.File(path, "a") as results:
+        results["histories"].attrs.update(vibration_scale=50.0, load_cycle=cycle, counterweight=1, speed_rpm=750.0)
+    table = read_playback_table(path)
+    if cycle == "wing_period":
+        expected = 0.01 + 50.0 * 0.002 * np.sin(2 * np.pi * 400 * time)
+        stated = 50.0 * 0.002
+    else:
+        mean = torsion[time >= time[-1] - 0.08].mean()
+        expected = mean + 50.0 * (torsion - mean)
+        stated = 50.0 * 0.5 * np.ptp(torsion)
+    # the wing frequency is the run's estimate (a refined spectral peak), 1e-10 off here
+    np.testing.assert_allclose(table.values[:, 0], expected, rtol=0, atol=1e-6 * stated)
+    assert table.scaling.wing_amplitude == pytest.approx(stated, rel=1e-6)
+
+
+OTHER_KINDS = {
+    "sweep": ({"fretwork_format": "fretwork-sweep"}, "a speed sweep of `fretwork sweep`", "`fretwork report`"),
+    # a sweep written before sweeps had their own tag
+    "older sweep": ({"fretwork_format": "fretwork-results"}, "a speed sweep of `fretwork sweep`",
+                    "`fretwork report`"),
+    "interface histories": ({"format": "fretwork-interface-histories", "format_version": 1},
+                            "an interface-histories file", "[coupling] histories"),
+}
+
+
+@pytest.mark.parametrize("kind", list(OTHER_KINDS), ids=list(OTHER_KINDS))
+def test_a_file_of_another_kind_is_refused_naming_it_and_its_reader(kind, tmp_path, capsys):
+    attrs, what, reader = OTHER_KINDS[kind]
+    with h5py.File(tmp_path / "other.h5", "w") as file:
+        file.attrs.update(attrs)
+        if "sweep" in kind:
+            file.create_group("sweep").create_dataset("speed", data=[700.0, 750.0])
+    assert main_export([str(tmp_path / "other.h5"), "-o", str(tmp_path / "loads.fmu")]) == 2
+    message = capsys.readouterr().err
+    assert f"other.h5 is {what}" in message and reader in message and "not a run's results" in message
+    assert not (tmp_path / "loads.fmu").exists()
 
 
 def test_output_path_that_is_a_folder_raises(results_file, tmp_path):
