@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mbs.counterweight import ReducedCounterweight
-from mbs.histories import RunHistories, steady_part, wing_amplitude
+from mbs.histories import RunHistories, steady_part, unsettled_message, wing_amplitude
 from mbs.model import reduce_bodies, simulate
 from mbs.parameters import ModelParams
 from reduction.errors import InputError
@@ -48,6 +48,9 @@ class MultibodyLoading:
     geometry: the CW's width, height (outer face), thickness (mm); mode_frequencies_hz (m,):
     fixed-interface eigenfrequencies; torsion_mode: index of its wing torsion mode; wall_time_s:
     of the multibody run (0 for histories read from a file, :mod:`mbs.histories_file`).
+    unsettled_change: how far the run was from steady (:func:`mbs.histories.unsettled_change`,
+    None: too short to tell); revolutions: the run's length. Both None for histories read from
+    a file, whose steadiness is the file's author's to ensure.
     """
 
     speed_rpm: float
@@ -66,6 +69,16 @@ class MultibodyLoading:
     mode_frequencies_hz: np.ndarray
     torsion_mode: int
     wall_time_s: float
+    unsettled_change: float | None = None
+    revolutions: float | None = None
+
+    @property
+    def unsettled(self) -> str | None:
+        """Why the wing amplitude of this run cannot be trusted (its response is not steady), or
+        None (steady, or histories from a file)."""
+        if self.revolutions is None:
+            return None
+        return unsettled_message(self.unsettled_change, self.revolutions, self.speed_rpm)
 
     @property
     def n_modes(self) -> int:
@@ -136,6 +149,8 @@ def run_loading(params: ModelParams, reduced: ReducedCounterweight, histories: R
         mode_frequencies_hz=np.asarray(reduced.eigenfrequencies, dtype=float).copy(),
         torsion_mode=int(reduced.torsion_mode),
         wall_time_s=histories.wall_time,
+        unsettled_change=histories.unsettled_change,
+        revolutions=float(params.solver.revolutions),
     )
 
 

@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402 (backend must be chosen first)
 import numpy as np  # noqa: E402
 
 from mbs.campbell import Campbell  # noqa: E402
-from mbs.histories import RunHistories, steady_part  # noqa: E402
+from mbs.histories import SETTLED_CHANGE, RunHistories, steady_part  # noqa: E402
 from mbs.spectra import Spectrum  # noqa: E402
 
 
@@ -41,8 +41,14 @@ def plot_time_history(histories: RunHistories, path) -> Path:
         ax.set_ylabel(f"CW{c + 1} axial motion (µm)")
         ax.grid(True, alpha=0.3)
         ax.legend(loc="upper right", fontsize=7)
-    axes[0, 0].set_title("wing tips over the steady second half of the run (where the wing amplitude is "
-                         "measured; start-up transient left out)", fontsize=9)
+    change = histories.unsettled_change
+    steadiness = ("NOT STEADY: too short to check" if change is None else
+                  f"amplitude over its first and last engine cycle within {100 * change:.1f} %"
+                  if change <= SETTLED_CHANGE else
+                  f"NOT STEADY: amplitude over its first and last engine cycle differs by {100 * change:.0f} %")
+    axes[0, 0].set_title("wing tips over the second half of the run, where the wing amplitude is measured\n"
+                         f"({steadiness})", fontsize=9, color="k" if change is not None and change <= SETTLED_CHANGE
+                         else "tab:red")
     axes[-1, 0].set_xlabel("shaft revolutions from the start of the run (rev)")
     return _save(figure, path)
 

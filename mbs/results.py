@@ -30,6 +30,8 @@ if TYPE_CHECKING:  # mbs.loading runs the model (exudyn): not imported to write 
 
 FORMAT = "fretwork-results"
 FORMAT_VERSION = 1
+#: the root attribute ``fretwork_format`` of a sweep file (:func:`mbs.sweep.write_sweep`)
+SWEEP_FORMAT = "fretwork-sweep"
 _XYZ = ["x (tangential)", "y (radial)", "z (crank axis)"]
 MODAL_UNITS = "mm*sqrt(t)"  # mode shapes are mass-normalised (1/sqrt(t)), u = Psi q in mm
 

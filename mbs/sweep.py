@@ -5,7 +5,9 @@ eigenfrequencies at that speed. :func:`collect_sweep` gathers the cases into a
 :class:`SweepResult` and :func:`write_sweep` stores it; running the cases (in parallel, on a
 cluster) is the pipeline's job (``pipelines.jobs.sweep``). Amplitudes and spectra use the
 steady state of every run (:mod:`mbs.histories`). A speed whose time integration fails is
-recorded in ``failures`` and the sweep goes on. Units: rpm, Hz, mm.
+recorded in ``failures`` and the sweep goes on; a speed whose response is not steady in the
+measuring window (:func:`mbs.histories.unsettled_change`) is recorded in ``unsettled``, its
+amplitude kept but not to be trusted. Units: rpm, Hz, mm.
 """
 
 from __future__ import annotations
@@ -19,10 +21,10 @@ import numpy as np
 
 from mbs.campbell import Campbell, campbell_diagram
 from mbs.excitation import excitation_orders
-from mbs.histories import steady_part
+from mbs.histories import steady_part, unsettled_message
 from mbs.model import SimulationError, simulate, system_eigenfrequencies
 from mbs.parameters import ModelParams
-from mbs.results import FORMAT, FORMAT_VERSION, write_campbell
+from mbs.results import FORMAT_VERSION, SWEEP_FORMAT, write_campbell
 from mbs.spectra import amplitude_spectrum, dominant_frequencies
 
 #: Number of dominant frequencies recorded per speed and number of system modes kept.
@@ -39,6 +41,9 @@ class SweepResult:
     crossings: engine-order lines meeting system modes (dicts: order, mode, speed_rpm,
     frequency_hz); resonance: (n,) True where a crossing lies within half a sweep step;
     failures: {speed_rpm: message}; campbell: the Campbell diagram (reduced CW and system).
+    unsettled_change (n,): how far each run was from steady (:func:`mbs.histories.unsettled_change`;
+    NaN where the run was too short to tell or failed); unsettled: {speed_rpm: message} for the
+    speeds whose amplitude is not to be trusted (not steady, or too short to tell).
     """
 
     speeds_rpm: np.ndarray
@@ -51,6 +56,8 @@ class SweepResult:
     resonance: np.ndarray
     failures: dict
     campbell: Campbell
+    unsettled_change: np.ndarray | None = None
+    unsettled: dict | None = None
 
     def peak_speed(self, counterweight: int = 0) -> float:
         """Speed (rpm) of the largest wing amplitude among the converged runs."""
@@ -65,6 +72,7 @@ class SweepResult:
             "resonance": self.resonance.tolist(),
             "crossings": self.crossings,
             "failures": {str(k): v for k, v in self.failures.items()},
+            "unsettled": {str(k): v for k, v in (self.unsettled or {}).items()},
             "peak_speed_rpm": self.peak_speed() if np.isfinite(self.wing_amplitude).any() else None,
         }
 
@@ -91,6 +99,8 @@ class SpeedCase:
     dominant_orders: np.ndarray | None = None
     real_time_factor: float = np.nan
     failure: str | None = None
+    unsettled_change: float | None = None
+    revolutions: float | None = None
 
 
 def run_speed(params: ModelParams, reduced, reduced_throw) -> SpeedCase:
@@ -102,7 +112,8 @@ def run_speed(params: ModelParams, reduced, reduced_throw) -> SpeedCase:
     except SimulationError as error:
         return SpeedCase(eigen, failure=str(error))
     amplitude, frequencies, orders = _evaluate(run, params.shaft_speed)
-    return SpeedCase(eigen, amplitude, frequencies, orders, run.real_time_factor)
+    return SpeedCase(eigen, amplitude, frequencies, orders, run.real_time_factor,
+                     unsettled_change=run.unsettled_change, revolutions=float(params.solver.revolutions))
 
 
 def collect_sweep(model_params: ModelParams, speeds: np.ndarray, cases: list, reduced) -> SweepResult:
@@ -114,7 +125,8 @@ def collect_sweep(model_params: ModelParams, speeds: np.ndarray, cases: list, re
     orders = np.full((n, N_DOMINANT), np.nan)
     real_time = np.full(n, np.nan)
     system = np.full((n, N_SYSTEM_MODES), np.nan)
-    failures = {}
+    change = np.full(n, np.nan)
+    failures, unsettled = {}, {}
     for i, (speed, case) in enumerate(zip(speeds, cases)):
         if isinstance(case, str):
             failures[float(speed)] = case
@@ -125,6 +137,12 @@ def collect_sweep(model_params: ModelParams, speeds: np.ndarray, cases: list, re
             continue
         amplitude[i], frequencies[i], orders[i] = case.wing_amplitude, case.dominant_frequencies, case.dominant_orders
         real_time[i] = case.real_time_factor
+        if case.unsettled_change is not None:
+            change[i] = case.unsettled_change
+        if case.revolutions is not None:
+            message = unsettled_message(case.unsettled_change, case.revolutions, float(speed))
+            if message is not None:
+                unsettled[float(speed)] = message
     active_orders = excitation_orders(model_params.excitation, model_params.effects)
     campbell = campbell_diagram(reduced, speeds, active_orders, system_frequencies=system)
     crossings = campbell.system_crossings if n > 1 else []
@@ -133,7 +151,7 @@ def collect_sweep(model_params: ModelParams, speeds: np.ndarray, cases: list, re
     return SweepResult(
         speeds_rpm=speeds, wing_amplitude=amplitude, dominant_frequencies=frequencies, dominant_orders=orders,
         real_time_factor=real_time, system_frequencies=system, crossings=crossings, resonance=resonance,
-        failures=failures, campbell=campbell,
+        failures=failures, campbell=campbell, unsettled_change=change, unsettled=unsettled,
     )
 
 
@@ -142,7 +160,7 @@ def write_sweep(path, result: SweepResult) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with h5py.File(path, "w") as root:
-        root.attrs["fretwork_format"] = FORMAT
+        root.attrs["fretwork_format"] = SWEEP_FORMAT
         root.attrs["format_version"] = FORMAT_VERSION
         group = root.create_group("sweep")
         fields = [
@@ -154,11 +172,16 @@ def write_sweep(path, result: SweepResult) -> Path:
             ("system_frequencies", result.system_frequencies, "Hz", "Coupled model eigenfrequencies per speed."),
             ("resonance", result.resonance.astype(np.int8), "-", "1 where an order line crosses a mode."),
         ]
+        if result.unsettled_change is not None:
+            fields.append(("unsettled_change", result.unsettled_change, "-",
+                           "Relative change of the wing amplitude between the first and the last engine "
+                           "cycle of the steady half (NaN: too short to tell); above 0.05 the run had not settled."))
         for name, data, units, description in fields:
             dataset = group.create_dataset(name, data=data)
             dataset.attrs["units"] = units
             dataset.attrs["description"] = description
         group.attrs["crossings_json"] = json.dumps(result.crossings)
         group.attrs["failures_json"] = json.dumps({str(k): v for k, v in result.failures.items()})
+        group.attrs["unsettled_json"] = json.dumps({str(k): v for k, v in (result.unsettled or {}).items()})
         write_campbell(root.create_group("campbell"), result.campbell)
     return path

@@ -76,10 +76,16 @@ class Coupled:
     patterns: tuple
 
     def summary(self) -> dict:
-        return {"wing_amplitude_mm": self.cycle.wing_amplitude,
-                "multibody_wing_amplitude_mm": self.cycle.multibody_wing_amplitude,
-                "vibration_scale": self.cycle.scale, "load_cycle": self.cycle.cycle,
-                "load_cycle_frequency_hz": self.cycle.frequency_hz, "engine_speed_rpm": self.loading.speed_rpm}
+        """The coupling's figures for a run summary; ``multibody_warning`` when the multibody
+        response was not steady where the wing amplitude was measured."""
+        out = {"wing_amplitude_mm": self.cycle.wing_amplitude,
+               "multibody_wing_amplitude_mm": self.cycle.multibody_wing_amplitude,
+               "vibration_scale": self.cycle.scale, "load_cycle": self.cycle.cycle,
+               "load_cycle_frequency_hz": self.cycle.frequency_hz, "engine_speed_rpm": self.loading.speed_rpm,
+               "multibody_unsettled_change": self.loading.unsettled_change}
+        if self.loading.unsettled is not None:
+            out["multibody_warning"] = self.loading.unsettled
+        return out
 
 
 def multibody_params(scene: Scene):

@@ -116,6 +116,8 @@ def _human_summary(outcome) -> str:
         lines.append("  time: " + ", ".join(
             f"{name.removesuffix('_s').replace('_', ' ')} {value:.1f} s" + (f" ({phases})" if name == "procedure_s" and phases else "")
             for name, value in times.items() if not name.endswith("_phase_s")))
+    if s.get("multibody_warning"):
+        lines.append(f"  WARNING: {s['multibody_warning']}")
     lines.append(f"  results: {outcome.results_path}")
     if outcome.plots:
         lines.append(f"  plots:   {Path(outcome.plots[0]).parent}")

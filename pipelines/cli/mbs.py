@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mbs.histories import unsettled_message
 from mbs.model import SimulationError
 from mbs.parameters import ModelParams
 from mbs.plots import plot_campbell, plot_sweep
@@ -85,6 +86,7 @@ def _table(result) -> str:
         amplitude = 1e3 * result.wing_amplitude[i]
         f = result.dominant_frequencies[i]
         note = "FAILED: " + result.failures[float(speed)] if float(speed) in result.failures else (
+            "NOT STEADY (amplitude not to be trusted)" if float(speed) in (result.unsettled or {}) else
             "order/mode crossing" if result.resonance[i] else "")
         lines.append(f"{speed:8.1f} {amplitude[0]:12.3f} {amplitude[1]:12.3f} {f[0]:9.1f} {f[1]:9.1f}  {note}")
     for crossing in result.crossings:
@@ -115,6 +117,8 @@ def run_sweep(args) -> int:
     else:
         print(_table(result))
         print(f"results: {path}")
+    for message in (result.unsettled or {}).values():
+        print(f"fretwork: warning: {message}", file=sys.stderr)
     return 0 if np.isfinite(result.wing_amplitude).any() else 1
 
 
@@ -162,6 +166,7 @@ def run_single(args) -> int:
         "plots": {name: str(path) for name, path in outputs.plots.items()},
         "speed_rpm": params.speed_rpm,
         "wing_amplitude_mm": histories.wing_amplitude.tolist(),
+        "unsettled_change": histories.unsettled_change,
         "torsion_mode_hz": outputs.reduced.torsion_frequency,
         "real_time_factor": histories.real_time_factor,
         "time_step_s": params.solver.time_step,
@@ -175,4 +180,7 @@ def run_single(args) -> int:
     else:
         for key, value in summary.items():
             print(f"{key}: {value}")
+    message = unsettled_message(histories.unsettled_change, params.solver.revolutions, params.speed_rpm)
+    if message is not None:
+        print(f"fretwork: warning: {message}", file=sys.stderr)
     return 0

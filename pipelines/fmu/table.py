@@ -25,6 +25,7 @@ import h5py
 import numpy as np
 
 from mbs import histories_file
+from mbs.results import SWEEP_FORMAT
 from pipelines.fmu.scaling import LoadScaling, load_scaling
 from reduction.errors import InputError
 
@@ -39,7 +40,7 @@ _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _QUOTED_NAME = re.compile(r"[A-Za-z0-9_!#$%&()*+,\-./:;<=>?@\[\]^{}|~ ]+\Z")
 #: fretwork files that hold no histories to play, by their format tag: what they are, what reads them
 OTHER_KINDS = {
-    "fretwork-sweep": "a speed sweep of `fretwork sweep` (wing amplitudes and the Campbell diagram per engine "
+    SWEEP_FORMAT: "a speed sweep of `fretwork sweep` (wing amplitudes and the Campbell diagram per engine "
                       "speed), which `fretwork report` reads from its folder",
     histories_file.FORMAT: "an interface-histories file (docs/histories_format.md), which a coupled scene reads "
                            "through its [coupling] histories key",
@@ -121,7 +122,7 @@ def _refuse_other_kinds(results: h5py.File, results_path: Path) -> None:
     tag = tag.decode() if isinstance(tag, bytes) else tag
     # sweeps written before they had their own tag carry the results tag
     if tag == "fretwork-results" and "sweep" in results and "histories" not in results:
-        tag = "fretwork-sweep"
+        tag = SWEEP_FORMAT
     if tag in OTHER_KINDS:
         raise InputError(f"{results_path} is {OTHER_KINDS[tag]}, not a run's results: `fretwork export-fmu` plays "
                          "the /histories of the run.h5 of `fretwork mbs` or of the results.h5 of a coupled "

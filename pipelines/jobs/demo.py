@@ -120,7 +120,8 @@ def _summary(name: str, s: dict, limit, margins, times: dict) -> dict:
         "operating_point": ("unsafe" if operating_margin < 1 else "at the limit" if limit.limit_mm is not None
                             and abs(limit.limit_mm - s["wing_amplitude_mm"]) <= limit.tolerance_mm else "safe"),
         **{k: v for k, v in margins.to_json().items()
-           if k in ("smallest_margin", "smallest_margin_speed_rpm", "unsafe_speeds", "at_limit_speeds")},
+           if k in ("smallest_margin", "smallest_margin_speed_rpm", "unsafe_speeds", "at_limit_speeds", "warnings")},
+        **({"multibody_warning": s["multibody_warning"]} if s.get("multibody_warning") else {}),
         "margins": describe_margins(margins),
         "wall_time_s": sum(times.values()),
     }
@@ -141,6 +142,8 @@ def describe(result: DemoResult) -> str:
                      f"at the operating point ({s['operating_point'].upper() if s['operating_point'] != 'safe' else 'safe'}), "
                      f"smallest {s['smallest_margin']:.2f} at {s['smallest_margin_speed_rpm']:.0f} rpm")
     lines.append(f"  margins: {s['margins']}")
+    if s.get("multibody_warning"):
+        lines.append(f"  WARNING (operating run): {s['multibody_warning']}")
     lines.append("  time: " + ", ".join(f"{k.removesuffix('_s').replace('_', ' ')} {v:.1f} s" for k, v in t.items())
                  + f" (total {s['wall_time_s']:.0f} s)")
     for name, path in result.files.items():

@@ -32,7 +32,9 @@ from reduction.errors import InputError
 @dataclass
 class MarginResult:
     """speeds_rpm (n,); wing_amplitude_mm (n,) after calibration; calibration: the factor on the
-    multibody amplitudes; limit: the amplitude limit; margin (n,) = limit / amplitude."""
+    multibody amplitudes; limit: the amplitude limit; margin (n,) = limit / amplitude.
+    warnings: why some amplitudes are not to be trusted (a multibody run, of the sweep or of the
+    calibration, that had not settled where its amplitude was measured)."""
 
     speeds_rpm: np.ndarray
     wing_amplitude_mm: np.ndarray
@@ -40,6 +42,7 @@ class MarginResult:
     limit: LimitResult
     margin: np.ndarray
     limit_speed_rpm: float
+    warnings: tuple = ()
 
     @property
     def unsafe(self) -> np.ndarray:
@@ -71,6 +74,7 @@ class MarginResult:
             "smallest_margin": None if not np.isfinite(self.margin).any() else float(np.nanmin(self.margin)),
             "smallest_margin_speed_rpm": None if not np.isfinite(self.margin).any()
             else float(self.speeds_rpm[int(np.nanargmin(self.margin))]),
+            "warnings": list(self.warnings),
         }
 
 
@@ -86,20 +90,24 @@ def describe_margins(result: MarginResult) -> str:
         parts.append(f"UNSAFE at {_rpm(unsafe)}: the wing vibration exceeds the stick limit (margin below 1)")
     if at_limit.size:
         parts.append(f"at the limit at {_rpm(at_limit)} (within the limit's tolerance)")
-    return "; ".join(parts) if parts else "safe at every speed (every margin at least 1)"
+    said = "; ".join(parts) if parts else "safe at every speed (every margin at least 1)"
+    if result.warnings:
+        said += f"; WARNING, {len(result.warnings)} amplitude(s) not to be trusted: " + " | ".join(result.warnings)
+    return said
 
 
-def calibration_factor(scene, cache) -> float:
-    """Stated wing amplitude / multibody wing amplitude at the scene's speed (1 if none is stated)."""
+def calibration_factor(scene, cache) -> tuple[float, str | None]:
+    """(stated wing amplitude / multibody wing amplitude at the scene's speed, or 1 if none is
+    stated; why that multibody amplitude is not to be trusted, or None)."""
     from pipelines.coupling import multibody_loading
 
     stated = scene.data["coupling"].get("wing_amplitude")
     if stated is None:
-        return 1.0
-    modelled = multibody_loading(scene, cache).wing_amplitude
-    if modelled <= 0:
+        return 1.0, None
+    loading = multibody_loading(scene, cache)
+    if loading.wing_amplitude <= 0:
         raise InputError("the multibody run shows no wing vibration at the scene's speed: cannot calibrate")
-    return float(stated) / modelled
+    return float(stated) / loading.wing_amplitude, loading.unsettled
 
 
 def margin_sweep(scene_path, speeds, *, amplitude_range_mm, tolerance_mm, cache_dir=None, sweep_path=None,
@@ -130,11 +138,13 @@ def margins_of(scene, sweep, limit: LimitResult, cache) -> MarginResult:
     """Calibrated wing amplitude of the scene's CW per sweep speed and margin = limit / amplitude
     (the limit searched at the highest sweep speed)."""
     counterweight = CouplingSettings.of(scene).counterweight - 1
-    factor = calibration_factor(scene, cache)
+    factor, calibration_warning = calibration_factor(scene, cache)
     amplitude = factor * sweep.wing_amplitude[:, counterweight]
     margin = np.divide(limit.margin_limit_mm, amplitude, out=np.full_like(amplitude, np.inf), where=amplitude > 0)
     speeds = np.asarray(sweep.speeds_rpm, dtype=float)
-    return MarginResult(speeds, amplitude, factor, limit, margin, float(speeds.max()))
+    warnings = [f"calibration: {calibration_warning}"] if calibration_warning else []
+    warnings += list((sweep.unsettled or {}).values())
+    return MarginResult(speeds, amplitude, factor, limit, margin, float(speeds.max()), tuple(warnings))
 
 
 def write_margins(path, result: MarginResult) -> None:

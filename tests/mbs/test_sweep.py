@@ -37,9 +37,14 @@ def test_gear_mesh_resonance_peaks_at_the_campbell_crossing_within_one_step(tmp_
     assert result.resonance[peak] or result.resonance[max(peak - 1, 0)] or result.resonance[min(peak + 1, len(result.resonance) - 1)]
     assert result.dominant_orders[peak, 0] == pytest.approx(params.excitation.gear_teeth, rel=0.02)
     with h5py.File(tmp_path / "sweep.h5") as root:
-        assert root.attrs["fretwork_format"] == "fretwork-results"
+        assert root.attrs["fretwork_format"] == "fretwork-sweep"
         assert root["sweep/wing_amplitude"].shape == (7, 2)
         assert root["sweep/wing_amplitude"].attrs["units"] == "mm"
+        # 1.5 revolutions: a second half shorter than one engine cycle, so no speed's steadiness
+        # can be judged, and the sweep says so for every speed
+        assert np.isnan(root["sweep/unsettled_change"][:]).all()
+    assert sorted(result.unsettled) == sorted(result.speeds_rpm.tolist())
+    assert all("too short" in message for message in result.unsettled.values())
 
 
 def test_a_failing_speed_is_reported_and_the_sweep_continues(monkeypatch):

@@ -241,7 +241,8 @@ def test_sweep_without_margins_never_builds_the_contact_model(tmp_path, monkeypa
     monkeypatch.setattr(coupling, "multibody_loading", refuse)
     before = dict(stages.EXECUTIONS)
     scene = tmp_path / "cw.toml"
-    text = SCENE.read_text().replace("n_modes = 6", "n_modes = 2").replace("revolutions = 3.0", "revolutions = 0.5")
+    text = SCENE.read_text().replace("n_modes = 6", "n_modes = 2").replace("revolutions = 12.0 ", "revolutions = 0.5")
+    assert "revolutions = 0.5" in text
     scene.write_text(text)
     assert main(["sweep", str(scene), "--speeds", "700,750", "--out", str(tmp_path / "sweep.h5"), "--workers", "0",
                  "--json"]) == 0
@@ -282,8 +283,9 @@ def test_sweep_margins_are_limit_over_calibrated_amplitude(tmp_path, monkeypatch
 
     monkeypatch.setattr(limits, "run_amplitude", _fake_run)
     scene = tmp_path / "cw.toml"
-    scene.write_text(SCENE.read_text().replace("n_modes = 6", "n_modes = 4").replace("revolutions = 3.0",
+    scene.write_text(SCENE.read_text().replace("n_modes = 6", "n_modes = 4").replace("revolutions = 12.0 ",
                                                                                        "revolutions = 1.5"))
+    assert "revolutions = 1.5" in scene.read_text()
     out = tmp_path / "sweep.h5"
     assert main(["sweep", str(scene), "--speeds", "700,750", "--margins", "--amplitude", "100:400",
                  "--tolerance", "5", "--out", str(out), "--workers", "0", "--cache", str(tmp_path), "--json"]) == 0

@@ -83,9 +83,10 @@ def place(tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("first-hour")
     text = ((EXAMPLES / "counterweight.toml").read_text()
             .replace("contact_size = 10.0", "contact_size = 20.0").replace("n_modes = 6", "n_modes = 4")
-            .replace("revolutions = 3.0", "revolutions = 2.0").replace("cof_cycles = 400", "cof_cycles = 20")
+            .replace("revolutions = 12.0 ", "revolutions = 2.0").replace("cof_cycles = 400", "cof_cycles = 20")
             .replace("vibration_run_up = 300", "vibration_run_up = 15").replace("wear_cycles = 800", "wear_cycles = 5"))
     assert "cof_cycles = 20" in text and "vibration_run_up = 15" in text and "wear_cycles = 5" in text
+    assert "revolutions = 2.0" in text
     (folder / "cw.toml").write_text(text)
     (folder / "unit_mistakes.toml").write_text(
         text.replace("wing_amplitude = 0.100", "wing_amplitude = 100.0")
