@@ -3,7 +3,12 @@
 Layout (format_version 1; every dataset carries a ``units`` attribute):
 
     /                      attrs: fretwork_format="fretwork-results", format_version,
-                           scene_name, scene_toml, complete (False until the run ends),
+                           scene_name, scene_toml (the scene as run, resolved: its scene.base
+                           chain merged, overrides applied, file paths absolute, written as TOML
+                           that ``fretwork run`` reads from any folder; see
+                           pipelines.scene.resolved_text. Files written before it was resolved
+                           hold the top scene file's own text, its base not included),
+                           complete (False until the run ends),
                            ending (contact.verdict.Ending: completed, shakedown, loosening, or
                            slid_off / wear_runaway: the cycles so far, without /final and /summary)
     /points/               coordinates (n, dim) mm, area (n,) mm² (mm in 2D), normal (n, dim),
@@ -43,7 +48,11 @@ of a 12- or 40-increment cycle: as much as the contact solve of a small interfac
 is written changes no value in it, but it changes where HDF5 places the chunks, so the rule
 counts cycles and never reads the clock: two runs of one scene give the same bytes however long
 they take. (Every 10 s of wall time, as it was, gave longer runs equal datasets in different
-bytes.)
+bytes.) After every checkpoint the run goes on in a part file made anew from ``checkpoint.h5``
+(its groups copied into a fresh file), and a resumed run starts from the same copy: it ends
+with the same bytes as the uninterrupted run, and no bigger. (Deleting ``/checkpoint`` from a
+copy of ``checkpoint.h5``, as it was, left its space in the file: a counterweight run of 260
+cycles, 4.56 MB uninterrupted, was 7.12 MB after two resumes; now 4.79 MB either way.)
 """
 
 from __future__ import annotations
@@ -51,6 +60,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import tomllib
 from pathlib import Path
 
 import h5py
@@ -60,6 +70,7 @@ from contact.energy import EnergyMeter
 from contact.procedure import PHASES, CycleSummary, IncrementRecord, Observer
 from mbs.results import write_loading_histories
 from pipelines import interrupts
+from pipelines import scene as scenes
 from pipelines.output.checkpoint import read_snapshot, write_snapshot
 from reduction.errors import InputError
 
@@ -161,7 +172,7 @@ class ResultsWriter(Observer):
         root = self.file
         root.attrs.update(fretwork_format=FORMAT, format_version=FORMAT_VERSION,
                           scene_name=model.scene.name, complete=False,
-                          scene_toml=model.scene.path.read_text() if model.scene.path else "")
+                          scene_toml=scenes.resolved_text(model.scene))
         pairing = model.assembly.pairing
         points = root.create_group("points")
         for name, data, units in (("coordinates", pairing.slave.coordinates, "mm"),
@@ -180,19 +191,42 @@ class ResultsWriter(Observer):
             raise InputError(f"nothing to resume: {self.checkpoint_path} does not exist")
         try:
             with h5py.File(self.checkpoint_path, "r") as file:
-                if file.attrs.get("scene_toml", "") != (self.model.scene.path.read_text()
-                                                         if self.model.scene.path else ""):
-                    raise InputError(f"{self.checkpoint_path} belongs to a different scene; "
-                                     "resume with the scene file the run started from")
+                self._check_scene(str(file.attrs.get("scene_toml", "")))
                 self.snapshot = read_snapshot(file["checkpoint"], self.meter)
         except OSError as error:
             raise InputError(f"{self.checkpoint_path} cannot be read: {error}") from None
-        shutil.copyfile(self.checkpoint_path, self.part_path)
+        self._part_from_checkpoint()
+
+    def _check_scene(self, text: str) -> None:
+        """Refuse a checkpoint whose resolved scene (``scene_toml``) is not this run's: a changed
+        base file counts as much as a changed scene file; comments and layout do not."""
+        try:
+            stored = tomllib.loads(text)
+        except tomllib.TOMLDecodeError:
+            stored = {}
+        changed = scenes.differences(stored, scenes.resolved(self.model.scene))
+        if changed:
+            shown = ", ".join(changed[:5]) + (f" and {len(changed) - 5} more" if len(changed) > 5 else "")
+            raise InputError(f"{self.checkpoint_path} belongs to a different scene ({shown} changed "
+                             "since the run started, in the scene file or a base it extends); resume "
+                             "with the scene the run started from, or start the run again")
+
+    def _part_from_checkpoint(self) -> None:
+        """Make the part file anew from ``checkpoint.h5``: its results copied into a fresh file,
+        ``/checkpoint`` left out. Done after every checkpoint as well as on resume, so that a
+        resumed run goes on from the very bytes the uninterrupted run went on from, and ends with
+        the same file (a copy with ``/checkpoint`` deleted would keep the freed space)."""
+        with h5py.File(self.checkpoint_path, "r") as source, h5py.File(self.part_path, "w") as part:
+            for name in source.attrs:
+                part.attrs.create(name, source.attrs[name], dtype=source.attrs.get_id(name).dtype)
+            for name in source:
+                if name != "checkpoint":
+                    source.copy(source[name], part, name=name)
         self.file = h5py.File(self.part_path, "a")
-        del self.file["checkpoint"]
 
     def checkpoint(self, snapshot) -> None:
-        """Write ``checkpoint.h5`` atomically: results so far + ``/checkpoint`` snapshot."""
+        """Write ``checkpoint.h5`` atomically: results so far + ``/checkpoint`` snapshot; then go on
+        in a part file made from it (:meth:`_part_from_checkpoint`)."""
         self._flush()
         self.file.close()
         temporary = self.checkpoint_path.with_suffix(".h5.tmp")
@@ -200,7 +234,7 @@ class ResultsWriter(Observer):
         with h5py.File(temporary, "a") as file:
             write_snapshot(file.create_group("checkpoint"), snapshot, self.meter)
         os.replace(temporary, self.checkpoint_path)
-        self.file = h5py.File(self.part_path, "a")
+        self._part_from_checkpoint()
 
     def follow(self, space) -> None:
         """Go on in ``space``, a new pairing's contact space (finite sliding): its point areas."""

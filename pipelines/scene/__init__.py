@@ -8,19 +8,23 @@ Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
 
 Modules: :mod:`pipelines.scene.schema` (the keys, their types and meaning, :func:`validate`),
 :mod:`pipelines.scene.checks` (the cross-reference checks that :func:`validate` runs: bodies,
-materials, reference points, selections, effects, bolts, patterns); this package reads scene
-files (``scene.base`` chains, overrides) into a :class:`Scene`. Typed views of its tables live
-with their users (``pipelines.coupling.CouplingSettings``, ``contact.procedure.Procedure``),
-each with its defaults in one place.
+materials, reference points, selections, effects, bolts, patterns), :mod:`pipelines.scene.writer`
+(tables back to TOML text); this package reads scene files (``scene.base`` chains, overrides)
+into a :class:`Scene`, and gives a scene back resolved (:func:`resolved_text`: one file that
+stands for the whole chain). Typed views of its tables live with their users
+(``pipelines.coupling.CouplingSettings``, ``contact.procedure.Procedure``), each with its
+defaults in one place.
 """
 
 from __future__ import annotations
 
+import copy
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from pipelines.scene.schema import validate
+from pipelines.scene.writer import dumps
 from reduction.errors import InputError
 
 
@@ -138,6 +142,39 @@ def load(path: str | Path, overrides: dict | None = None) -> Scene:
         raise InputError(f"{path}: " + ("\n  - ".join([f"{len(problems)} problem(s):"] + problems)
                                         if len(problems) > 1 else problems[0]))
     return Scene(data, path)
+
+
+def resolved(scene: Scene) -> dict:
+    """The tables a run of ``scene`` uses: its ``scene.base`` chain merged, its overrides applied,
+    and every file it names (:data:`FILE_KEYS`) an absolute path, the scene file's own included,
+    so that they mean the same read from any folder."""
+    data = copy.deepcopy(scene.data)
+    return _anchored(data, scene.path.resolve().parent) if scene.path is not None else data
+
+
+def resolved_text(scene: Scene) -> str:
+    """:func:`resolved` as TOML text: a scene file without a base that :func:`load` reads, from
+    any folder, into the same tables (comments and layout of the original files are not kept)."""
+    return dumps(resolved(scene))
+
+
+def differences(old: dict, new: dict, prefix: str = "") -> list[str]:
+    """The dotted keys whose values differ between two scenes' tables, named as overrides name
+    them (an entry of an array of tables by its position: "loads.0.value")."""
+    missing = object()
+    keys = list(old) + [key for key in new if key not in old]
+    found = []
+    for key in keys:
+        a, b, name = old.get(key, missing), new.get(key, missing), prefix + key
+        if isinstance(a, dict) and isinstance(b, dict):
+            found += differences(a, b, name + ".")
+        elif (isinstance(a, list) and isinstance(b, list) and len(a) == len(b)
+              and all(isinstance(entry, dict) for entry in a + b)):
+            for index, (x, y) in enumerate(zip(a, b)):
+                found += differences(x, y, f"{name}.{index}.")
+        elif a != b:
+            found.append(name)
+    return found
 
 
 def apply_overrides(data: dict, overrides: dict) -> None:
