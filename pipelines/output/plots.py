@@ -3,10 +3,18 @@
 2D interfaces are drawn as profiles along the contact; 3D interfaces as maps over the two
 in-plane coordinates with the largest extent. Cycle histories show the area fractions and,
 where a clamp force exists, the clamp force versus cycles.
+
+A field is drawn as a field only where the run resolves it. Newton stops once the kinematic
+residual is within δ (``contact.solver.NewtonSettings.displacement_tolerance``, mm), so a stuck
+joint's slip range, and the dissipation, wear, FDP and FFDP that slip drives, come out as
+round-off of about δ (a slip range of 2e-11 mm, an FFDP of 6e-11 MPa²·mm) which a colour
+scale would show as hot spots. Such a field is drawn as zero and said to be round-off.
 """
 
 from __future__ import annotations
 
+import textwrap
+from dataclasses import dataclass
 from pathlib import Path
 
 import h5py
@@ -16,12 +24,11 @@ import matplotlib.tri
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.ticker import ScalarFormatter
-from mpl_toolkits.axes_grid1 import make_axes_locatable
+from matplotlib.ticker import ScalarFormatter  # noqa: E402
 
-#: Values below this magnitude (in the field's own units: mm, MPa, mJ/mm²) are round-off of a
-#: field that is zero (a stuck run's dissipation is ±1e-15, not a pattern worth a colour scale).
-ROUND_OFF = 1e-12
+from contact.damage import fretting_damage  # noqa: E402
+from contact.solver import NewtonSettings  # noqa: E402
+
 PATH_POINTS = 400
 
 FIELD_LABELS = {
@@ -49,14 +56,99 @@ AREA_LABELS = {
 }
 
 
-def _field(group, name):
-    value = group[name][()]
-    if name == "shear":
-        value = np.linalg.norm(np.atleast_2d(value.T).T.reshape(value.shape[0], -1), axis=1)
-    if name == "wear_depth":
-        value = value.sum(axis=0)
-    value = np.asarray(value, dtype=float)
-    return np.where(np.abs(value) < ROUND_OFF, 0.0, value)
+#: what a field that is zero to within the run's resolution is said to be
+ZERO_NAMES = {
+    "slip_range": "no slip",
+    "dissipation_in_cycle": "no frictional dissipation",
+    "wear_depth": "no wear",
+    "fdp": "no fretting damage",
+    "ffdp": "no fretting fatigue damage",
+}
+#: relative spread below which a field is one value (the last digits of float64 arithmetic)
+SAME_VALUE = 1e-12
+#: characters per line of a stacked panel's y label; of a map's title (9 pt), per inch of figure
+LABEL_WIDTH, TITLE_CHARACTERS_PER_INCH = 24, 14
+
+
+@dataclass(frozen=True)
+class Field:
+    """One field of one state as drawn: values in the units of FIELD_LABELS and ``round_off``,
+    the largest magnitude the run does not resolve (0: every nonzero value is resolved)."""
+
+    name: str
+    values: np.ndarray
+    round_off: float = 0.0
+
+    @property
+    def largest(self) -> float:
+        return float(np.max(np.abs(self.values), initial=0.0))
+
+    @property
+    def is_zero(self) -> bool:
+        return self.largest <= self.round_off
+
+    @property
+    def shown(self) -> np.ndarray:
+        """The values drawn: zero where the field is round-off."""
+        return np.zeros_like(self.values) if self.is_zero else self.values
+
+    @property
+    def is_uniform(self) -> bool:
+        return self.is_zero or float(np.ptp(self.values)) <= SAME_VALUE * self.largest
+
+    def note(self) -> str | None:
+        """What a uniform field is, e.g. "no slip (max 2.2e-11 mm, round-off below 2.8e-10 mm)"."""
+        if not self.is_uniform:
+            return None
+        if not self.is_zero:
+            return f"{self.values[0]:.6g} everywhere"
+        word = ZERO_NAMES.get(self.name, f"no {self.name.replace('_', ' ')}")
+        if self.largest == 0.0:
+            return f"{word} (0 everywhere)"
+        unit = FIELD_LABELS[self.name].rsplit("[", 1)[1].rstrip("]")
+        return f"{word} (max {self.largest:.2g} {unit}, round-off below {self.round_off:.2g} {unit})"
+
+
+def round_off(state: dict[str, np.ndarray], dimension: int) -> dict[str, float]:
+    """The largest magnitude of each slip-driven field of ``state`` that a converged run does
+    not resolve, in the field's units.
+
+    Newton resolves every displacement component to δ (mm), so a slip range (the norm over
+    the dimension − 1 tangential components of the difference of two slips) to 2·√(dim−1)·δ,
+    and the wear depth of two bodies to 2·δ. The dissipation of that slip at the state's
+    largest shear τ_max is τ_max times it; FDP and FFDP are Ruiz's parameters of that slip
+    range at each point's τ_max and σ_t (:func:`contact.damage.fretting_damage`). Pressure,
+    shear and COF are the law's response to resolved displacements and are not listed: any
+    nonzero value of theirs is drawn.
+    """
+    delta = NewtonSettings().displacement_tolerance
+    slip = 2.0 * np.sqrt(dimension - 1) * delta
+    shear = state.get("max_shear", state["shear"])
+    fdp, ffdp = fretting_damage(shear, np.full_like(shear, slip),
+                                state.get("surface_tangential_stress", np.zeros_like(shear)))
+    return {"slip_range": slip, "wear_depth": 2.0 * delta, "dissipation_in_cycle": float(np.max(shear)) * slip,
+            "fdp": float(np.max(fdp)), "ffdp": float(np.max(ffdp))}
+
+
+def _fields(group, dimension: int, row: int | None = None) -> dict[str, Field]:
+    """The drawn fields of the final state (``group`` = final) or of one recorded cycle
+    (``group`` = cycles/fields, its ``row``): shear as |τ|, the wear of both bodies summed."""
+    state = {}
+    for name in (*FIELD_LABELS, "max_shear", "surface_tangential_stress"):
+        if name in group:
+            value = np.asarray(group[name][()] if row is None else group[name][row], dtype=float)
+            if name == "shear":
+                value = np.linalg.norm(value.reshape(value.shape[0], -1), axis=1)
+            if name == "wear_depth":
+                value = value.sum(axis=0)
+            state[name] = value
+    floors = round_off(state, dimension)
+    return {name: Field(name, state[name], floors.get(name, 0.0)) for name in FIELD_LABELS if name in state}
+
+
+def _title(inches: float, *lines: str) -> str:
+    """A map's title wrapped to a figure ``inches`` wide."""
+    return "\n".join(textwrap.fill(line, int(TITLE_CHARACTERS_PER_INCH * inches)) for line in lines if line)
 
 
 def _plane_axes(coordinates: np.ndarray) -> tuple[int, int]:
@@ -65,49 +157,74 @@ def _plane_axes(coordinates: np.ndarray) -> tuple[int, int]:
     return int(min(first, second)), int(max(first, second))
 
 
-def _path_plot(mesh, final, names, a, b, title, out_dir) -> Path:
+def _stacked(count: int):
+    """A figure of ``count`` panels over one x axis; constrained layout keeps the suptitle, the
+    wrapped y labels and the x label clear of each other."""
+    fig, axes = plt.subplots(count, 1, figsize=(7, 0.9 + 1.9 * count), sharex=True, layout="constrained")
+    return fig, np.atleast_1d(axes)
+
+
+def _panel(ax, field: Field, x: np.ndarray, y: np.ndarray, **style) -> None:
+    """One stacked panel: the field's profile, its label wrapped to the panel's height, and a
+    field that is zero said so in the panel."""
+    ax.plot(x, y, "-", **style)
+    ax.set_ylabel(textwrap.fill(FIELD_LABELS[field.name], LABEL_WIDTH), fontsize=8)
+    ax.grid(alpha=0.3)
+    if field.is_zero:
+        ax.text(0.5, 0.5, field.note(), transform=ax.transAxes, ha="center", va="center", fontsize=8,
+                bbox={"facecolor": "white", "edgecolor": "0.7", "alpha": 0.9})
+
+
+def _path_plot(mesh, fields, a, b, title, out_dir) -> Path:
     """Fields along the straight line through the middle of the interface's ``b`` extent (the
     paper's Figs. 9 and 12), interpolated linearly over the contact facets at PATH_POINTS points;
     gaps where the line crosses a hole or leaves the contact."""
     middle = 0.5 * (mesh.y.min() + mesh.y.max())
     x = np.linspace(mesh.x.min(), mesh.x.max(), PATH_POINTS)
-    shown = [n for n in ("pressure", "slip_range", "cof", "wear_depth", "fdp") if n in names]
-    fig, axes = plt.subplots(len(shown), 1, figsize=(7, 1.9 * len(shown)), sharex=True)
-    for ax, name in zip(np.atleast_1d(axes), shown):
-        values = matplotlib.tri.LinearTriInterpolator(mesh, _field(final, name))(x, np.full_like(x, middle))
-        ax.plot(x, np.ma.filled(values.astype(float), np.nan), "-", lw=1.2)
-        ax.set_ylabel(FIELD_LABELS[name], fontsize=7)
-        ax.grid(alpha=0.3)
-    np.atleast_1d(axes)[-1].set_xlabel(f"{'xyz'[a]} [mm] along {'xyz'[b]} = {middle + 0.0:.4g} mm "
-                                       f"(the middle of the contact's {'xyz'[b]} extent)")
+    shown = [fields[n] for n in ("pressure", "slip_range", "cof", "wear_depth", "fdp") if n in fields]
+    fig, axes = _stacked(len(shown))
+    for ax, field in zip(axes, shown):
+        values = matplotlib.tri.LinearTriInterpolator(mesh, field.shown)(x, np.full_like(x, middle))
+        _panel(ax, field, x, np.ma.filled(values.astype(float), np.nan), lw=1.2)
+    fig.align_ylabels(axes)
+    axes[-1].set_xlabel(f"{'xyz'[a]} [mm] along {'xyz'[b]} = {middle + 0.0:.4g} mm "
+                        f"(the middle of the contact's {'xyz'[b]} extent)")
     fig.suptitle(f"{title}: fields along the line {'xyz'[b]} = {middle + 0.0:.3g} mm through the middle")
     return _save(fig, out_dir / "path.png")
 
 
 def _save(fig, target: Path) -> Path:
-    fig.tight_layout()
     fig.savefig(target, dpi=130)
     plt.close(fig)
     return target
 
 
-def _map(mesh, value, name, a, b, title, target) -> Path:
-    """A filled contour map, the colour bar as tall as the map; a field that is zero (or constant)
-    everywhere is drawn in one colour and said so."""
+def _map(mesh, field: Field, a, b, title, target) -> Path:
+    """A filled contour map with its colour bar under a wide map and beside a tall one, so that
+    the bar's label fits along it; a uniform field is drawn in one colour and said so."""
     width, height = np.ptp(mesh.x), np.ptp(mesh.y)
-    fig, ax = plt.subplots(figsize=(6.5, float(np.clip(5.5 * height / width, 2.0, 7.0)) + 1.0))
-    constant = np.ptp(value) <= ROUND_OFF
-    if constant:
-        mappable = ax.tripcolor(mesh, value, cmap="viridis", vmin=value[0] - 1.0, vmax=value[0] + 1.0)
-        title += f" ({value[0]:g} everywhere)"
+    wide = height <= width
+    if wide:  # 5.8 in of map across, under it its axis and the colour bar
+        figsize = (6.5, float(np.clip(5.8 * height / width, 1.0, 7.0)) + 1.3)
+    else:  # 4.3 to 7 in of map high, beside it its axis and the colour bar
+        map_height = float(np.clip(4.3 * height / width, 4.3, 7.0))
+        figsize = (max(4.0, map_height * width / height + 2.4), map_height + 0.9)
+    title = _title(figsize[0], title, field.note())
+    fig, ax = plt.subplots(figsize=(figsize[0], figsize[1] + 0.2 * (title.count("\n") + 1)), layout="constrained")
+    value = field.shown
+    if field.is_uniform:
+        mappable = ax.tripcolor(mesh, value, cmap="viridis", vmin=value[0] - 1.0, vmax=value[0] + 1.0,
+                                edgecolors="none", antialiased=False)
     else:
         mappable = ax.tricontourf(mesh, value, levels=24, cmap="viridis")
     ax.set_aspect("equal")
-    bar_axes = make_axes_locatable(ax).append_axes("right", size="4%", pad=0.1)
-    fig.colorbar(mappable, cax=bar_axes, label=FIELD_LABELS[name], ticks=[value[0]] if constant else None)
+    ax.margins(0.0)
+    bar = fig.colorbar(mappable, ax=ax, location="bottom" if wide else "right", fraction=0.05, pad=0.02,
+                       aspect=60, ticks=[value[0]] if field.is_uniform else None)
+    bar.set_label(FIELD_LABELS[field.name], fontsize=9)
     ax.set_xlabel(f"{'xyz'[a]} [mm]")
     ax.set_ylabel(f"{'xyz'[b]} [mm]")
-    ax.set_title(title, fontsize=9)
+    ax.set_title(title, fontsize=9, pad=12)  # clear of the top y tick label, half above the map's edge
     return _save(fig, target)
 
 
@@ -117,59 +234,58 @@ def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     with h5py.File(path, "r") as file:
         coordinates = file["points/coordinates"][()]
-        names = [n for n in FIELD_LABELS if n in file["final"]]
         title = file.attrs.get("scene_name", "")
         if coordinates.shape[1] == 2:
-            written = [_line_fields(file, coordinates, names, title, out_dir)]
+            written = [_line_fields(file, coordinates, title, out_dir)]
         else:
-            written = _surface_maps(file, coordinates, names, title, out_dir)
+            written = _surface_maps(file, coordinates, title, out_dir)
         if "figures" in file["cycles"]:
             written.append(_cycles_plot(file["cycles"], title, out_dir))
     return written
 
 
-def _line_fields(file, coordinates, names, title, out_dir) -> Path:
+def _line_fields(file, coordinates, title, out_dir) -> Path:
     """2D scenes: every final field along the contact, pressure and shear of the first cycle too."""
-    final = file["final"]
+    fields = _fields(file["final"], 2)
     order = np.argsort(coordinates[:, 0])
     x = coordinates[order, 0]
-    fig, axes = plt.subplots(len(names), 1, figsize=(7, 1.9 * len(names)), sharex=True)
+    fig, axes = _stacked(len(fields))
     first = file["cycles/fields"]
-    for ax, name in zip(np.atleast_1d(axes), names):
-        ax.plot(x, _field(final, name)[order], "-", lw=1.4, label="final")
-        if name in ("pressure", "shear") and name in first:
-            initial = first[name][0]
-            initial = np.linalg.norm(initial.reshape(initial.shape[0], -1), axis=1) if name == "shear" else initial
+    for ax, field in zip(axes, fields.values()):
+        _panel(ax, field, x, field.shown[order], lw=1.4, label="final")
+        if field.name in ("pressure", "shear") and field.name in first:
+            initial = first[field.name][0]
+            if field.name == "shear":
+                initial = np.linalg.norm(initial.reshape(initial.shape[0], -1), axis=1)
             ax.plot(x, initial[order], "--", lw=1.0, label="first cycle")
             ax.legend(fontsize=7)
-        ax.set_ylabel(FIELD_LABELS[name], fontsize=7)
-        ax.grid(alpha=0.3)
-    np.atleast_1d(axes)[-1].set_xlabel("position along the contact x [mm]")
+    fig.align_ylabels(axes)
+    axes[-1].set_xlabel("position along the contact x [mm]")
     fig.suptitle(f"{title}: interface fields")
     return _save(fig, out_dir / "fields.png")
 
 
-def _surface_maps(file, coordinates, names, title, out_dir) -> list[Path]:
+def _surface_maps(file, coordinates, title, out_dir) -> list[Path]:
     """3D scenes: the path plot, a map per final field and the maps after the COF phase."""
-    final = file["final"]
+    fields = _fields(file["final"], 3)
     a, b = _plane_axes(coordinates)
     facets = file["points/facets"][()] if "points/facets" in file else None
     # Triangles of the interface's own facets: holes (a bolt hole) stay holes.
     triangles = None if facets is None else (
         facets if facets.shape[1] == 3 else np.concatenate([facets[:, [0, 1, 2]], facets[:, [0, 2, 3]]]))
     mesh = matplotlib.tri.Triangulation(coordinates[:, a], coordinates[:, b], triangles)
-    written = [_path_plot(mesh, final, names, a, b, title, out_dir)]
-    for name in names:
-        written.append(_map(mesh, _field(final, name), name, a, b, f"{title}: {name.replace('_', ' ')}",
-                            out_dir / f"{name}_map.png"))
+    written = [_path_plot(mesh, fields, a, b, title, out_dir)]
+    for name, field in fields.items():
+        written.append(_map(mesh, field, a, b, f"{title}: {name.replace('_', ' ')}", out_dir / f"{name}_map.png"))
     # the stabilised state before the wear phase (the paper's Figs. 8, 15 and 16a-b)
     phase_of = dict(zip(file["cycles/cycle"][()], file["cycles/phase"][()]))
     recorded = file["cycles/fields/cycle"][()] if "cycles/fields/cycle" in file else np.zeros(0, int)
     cof_rows = [k for k, c in enumerate(recorded) if phase_of.get(c) == 1]
     if cof_rows and any(p == 2 for p in phase_of.values()):
-        row, fields = cof_rows[-1], file["cycles/fields"]
+        row = cof_rows[-1]
+        at_row = _fields(file["cycles/fields"], 3, row)
         for name in ("cof", "slip_range", "max_utilised_cof", "dissipation_in_cycle"):
-            written.append(_map(mesh, fields[name][row], name, a, b,
+            written.append(_map(mesh, at_row[name], a, b,
                                 f"{title}: {name.replace('_', ' ')} after the COF phase (cycle {recorded[row]})",
                                 out_dir / f"{name}_map_end_of_cof_phase.png"))
     return written
@@ -187,7 +303,8 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
     equivalent = cycles["equivalent_cycles"][()]
     clamp = figures.get("clamp_force_N")
     has_clamp = clamp is not None and np.any(np.isfinite(clamp[()]))
-    fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(9, 5.2 if has_clamp else 3.2), sharex=True)
+    fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(9, 5.2 if has_clamp else 3.2), sharex=True,
+                             layout="constrained")
     axes = np.atleast_1d(axes)
     for key, name in AREA_LABELS.items():
         if key in figures:

@@ -339,7 +339,8 @@ def plot_histories(study: dict, path: Path) -> Path | None:
         if evident is not None:
             row = min(int(np.searchsorted(real, evident * (1.0 - 1e-12))), real.size - 1)
             force.plot(real[row], 1e-3 * clamp[row], marker="v", color=line.get_color(), markersize=8)
-    force.plot([], [], marker="v", linestyle="none", color="0.3", label="loosening evident")
+    if any(level["figures"].get("loosening_evident_at_cycles") is not None for level, *_ in histories):
+        force.plot([], [], marker="v", linestyle="none", color="0.3", label="loosening evident")
     force.set_ylabel("clamp force (kN)")
     force.legend(fontsize=8)
     area.set_ylabel("stick area (% of nominal)")
