@@ -133,11 +133,16 @@ def write_driving_histories(root: h5py.Group, coupled) -> None:
     """``/histories``: the multibody histories a coupled run's loads come from
     (:class:`pipelines.coupling.Coupled`), in the layout ``fretwork mbs`` writes, so that
     ``fretwork export-fmu`` plays them back from either file. ``vibration_scale``: the factor the
-    contact load cycle applies to their vibrating parts (a stated wing amplitude)."""
+    contact load cycle applies to their vibrating parts (a stated wing amplitude); ``load_cycle``
+    ("wing_period" or "revolution"), ``wing_amplitude`` and ``multibody_wing_amplitude`` (mm),
+    ``load_cycle_frequency_hz``: the cycle they were played in."""
     group = root.create_group("histories")
     write_loading_histories(group, coupled.loading, coupled.settings.counterweight)
     if coupled.cycle is not None:
-        group.attrs["vibration_scale"] = coupled.cycle.scale
+        group.attrs.update(vibration_scale=coupled.cycle.scale, load_cycle=coupled.cycle.cycle,
+                           wing_amplitude=coupled.cycle.wing_amplitude,
+                           multibody_wing_amplitude=coupled.cycle.multibody_wing_amplitude,
+                           load_cycle_frequency_hz=coupled.cycle.frequency_hz)
 
 
 class ResultsWriter(Observer):
@@ -393,9 +398,21 @@ class ResultsWriter(Observer):
 
 
 def read_summary(path: str | Path) -> dict:
-    """Verdict and figures of a finished results file."""
+    """Verdict and figures of a finished results file; InputError for a file of another kind
+    (a sweep, a multibody run.h5) or a run that did not finish."""
+    from mbs.results import SWEEP_FORMAT
+
     with h5py.File(path, "r") as file:
-        if file.attrs.get("fretwork_format") != FORMAT:
-            raise ValueError(f"{path} is not a fretwork results file")
+        tag = file.attrs.get("fretwork_format")
+        if tag == SWEEP_FORMAT:
+            raise InputError(f"{path} is a speed sweep of `fretwork sweep`, not a run's results file: "
+                             "`fretwork report FOLDER` reads its margins")
+        if tag != FORMAT:
+            raise InputError(f"{path} is not a fretwork results file (no fretwork_format = {FORMAT!r})")
+        if "summary" not in file:
+            ending = file.attrs.get("ending")
+            raise InputError(f"{path} has no summary: "
+                             + (f"the run stopped early ({ending})" if ending not in (None, "completed") else
+                                "an unfinished run, or the run.h5 of `fretwork mbs` (`fretwork export-fmu` reads that)"))
         summary = file["summary"].attrs
         return {"verdict": summary["verdict"], **json.loads(summary["figures"])}

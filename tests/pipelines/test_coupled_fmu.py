@@ -80,7 +80,29 @@ def test_the_run_holds_the_driving_histories_in_the_mbs_layout(coupled):
         assert histories.attrs["counterweight"] == 1
         # the scene states a wing amplitude: the contact cycle scales the vibration by this factor
         assert histories.attrs["vibration_scale"] == summary["vibration_scale"] != 1.0
+        # and says which cycle played them, so that export-fmu need not read it from the scene
+        assert histories.attrs["load_cycle"] == summary["load_cycle"]
+        assert histories.attrs["wing_amplitude"] == summary["wing_amplitude_mm"]
+        assert histories.attrs["load_cycle_frequency_hz"] == summary["load_cycle_frequency_hz"]
         assert file.attrs["complete"]
+
+
+def test_read_summary_reads_a_run_and_names_a_file_of_another_kind(coupled, tmp_path):
+    from mbs.results import SWEEP_FORMAT
+    from pipelines.output.results import read_summary
+    from reduction.errors import InputError
+
+    out, _, summary = coupled
+    assert read_summary(out / "results.h5")["verdict"] == summary["verdict"]
+    sweep, unfinished = tmp_path / "sweep.h5", tmp_path / "unfinished.h5"
+    with h5py.File(sweep, "w") as file:
+        file.attrs["fretwork_format"] = SWEEP_FORMAT
+    with h5py.File(unfinished, "w") as file:
+        file.attrs.update(fretwork_format="fretwork-results", ending="slid_off")
+    with pytest.raises(InputError, match="speed sweep"):
+        read_summary(sweep)
+    with pytest.raises(InputError, match="stopped early .slid_off."):
+        read_summary(unfinished)
 
 
 def test_export_fmu_plays_a_coupled_run_back(coupled, tmp_path, capsys):
