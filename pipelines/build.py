@@ -79,9 +79,7 @@ def make_mesh(spec: dict, where: str, base: Path | None):
     except ImportError:
         raise InputError(f"'{where}.file': reading mesh files needs reduction.mesh.io, "
                          "which is not available in this installation") from None
-    if not path.is_file():
-        raise InputError(f"'{where}.file': {path} does not exist")
-    model = read_mesh(path)
+    model = read_mesh(path, f"{where}.file")
     return model.mesh, model
 
 

@@ -14,6 +14,8 @@ keep the file's mid-edge nodes; a scene's selections add those of edges whose co
 
 from __future__ import annotations
 
+import io
+from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -111,16 +113,18 @@ def from_skfem(mesh: skfem.Mesh) -> MeshModel:
                      element_sets=element_sets, source="scikit-fem mesh")
 
 
-def read_mesh(path) -> MeshModel:
-    """Read a volume (or 2D) mesh file with meshio; format from the file extension."""
+def read_mesh(path, where: str | None = None) -> MeshModel:
+    """Read a volume (or 2D) mesh file with meshio; format from the file extension (.inp Abaqus,
+    .msh Gmsh, others as meshio deduces them). ``where``: the scene key that names the file, said
+    in every error about it."""
     path = Path(path)
+    label = f"'{where}': {path}" if where else f"mesh file {path}"
+    if path.is_dir():
+        raise InputError(f"{label} is a folder, not a mesh file: name a mesh file in it (Abaqus .inp, Gmsh .msh)")
     if not path.is_file():
-        raise InputError(f"mesh file {path} does not exist")
-    try:
-        raw = meshio.read(path)
-    except Exception as error:  # meshio raises bare exceptions of many kinds for bad files
-        raise InputError(f"{path}: meshio cannot read it ({error})") from error
-    model = from_meshio(raw, source=str(path))
+        raise InputError(f"{label} does not exist")
+    raw = _read_raw(path, label)
+    model = from_meshio(raw, source=f"'{where}': {path}" if where else str(path))
     if path.suffix.lower() == ".inp":
         from reduction.mesh.abaqus import read_surfaces
 
@@ -128,6 +132,56 @@ def read_mesh(path) -> MeshModel:
         for name, nodes in read_surfaces(path).items():
             model.node_sets.setdefault(name, _compact(compact, nodes))
     return model
+
+
+#: readers of the formats the extension names for sure (meshio would try several for .msh)
+_READERS = {".inp": ("an Abaqus", meshio.abaqus.read), ".msh": ("a Gmsh", meshio.gmsh.read)}
+
+
+def _read_raw(path: Path, label: str) -> meshio.Mesh:
+    """The meshio mesh of a file, or an InputError naming ``label``. meshio prints its readers'
+    complaints and ends the process (SystemExit) when no reader accepts a file: its output is
+    kept out of the terminal and its exit becomes the error."""
+    kind, reader = _READERS.get(path.suffix.lower(), ("a mesh", meshio.read))
+    noise = io.StringIO()
+    try:
+        with redirect_stdout(noise), redirect_stderr(noise):
+            return reader(path)
+    except SystemExit:
+        raise InputError(f"{label} is not {kind} file that meshio can read; write it from the mesher as "
+                         "Abaqus .inp or Gmsh .msh") from None
+    except KeyError as error:  # a node or element number that the file does not define
+        raise InputError(f"{label}: {_undefined_number(path, error.args[0] if error.args else None)}") from None
+    except Exception as error:  # meshio raises bare exceptions of many kinds for bad files
+        detail = f" ({error})" if str(error) else ""
+        raise InputError(f"{label} is not {kind} file that meshio can read{detail}; check that it is "
+                         "complete (not truncated) and written in that format") from None
+
+
+def _undefined_number(path: Path, number) -> str:
+    """Say which number a file refers to without defining it: a node (of an element or a node set)
+    or an element (of an element set)."""
+    if path.suffix.lower() != ".inp" or number is None:
+        return f"it refers to number {number}, which the file does not define"
+    if int(number) in _abaqus_node_numbers(path):
+        return (f"an element set refers to element {number}, which the file does not define "
+                "(no *ELEMENT line has that number)")
+    return (f"an element (or node set) refers to node {number}, which the file does not define "
+            "(no *NODE line has that number); export the mesh again with its nodes")
+
+
+def _abaqus_node_numbers(path: Path) -> set[int]:
+    """The node numbers of the *NODE blocks of an Abaqus file."""
+    numbers, in_nodes = set(), False
+    with path.open(errors="replace") as stream:
+        for line in stream:
+            if line.startswith("*"):
+                in_nodes = line[1:].split(",")[0].strip().upper() == "NODE" and not line.startswith("**")
+                continue
+            head = line.split(",", 1)[0].strip()
+            if in_nodes and head.lstrip("-").isdigit():
+                numbers.add(int(head))
+    return numbers
 
 
 def _file_to_mesh_nodes(raw: meshio.Mesh, model: MeshModel) -> np.ndarray:

@@ -277,3 +277,30 @@ def test_abaqus_surfaces_by_element_faces_and_by_nodes(tmp_path):
         stream.write("*SURFACE, NAME=BAD\nNOSUCHSET, S2\n")
     with pytest.raises(InputError, match="BAD names element set 'NOSUCHSET'"):
         read_mesh(path)
+
+
+def test_a_file_meshio_cannot_read_names_the_key_and_the_file(tmp_path, capsys):
+    """meshio prints and ends the process (SystemExit) when no reader accepts a file: here an
+    InputError naming the scene key and the file, with nothing printed."""
+    garbage = tmp_path / "bad.msh"
+    garbage.write_text("garbage\n")
+    with pytest.raises(InputError) as error:
+        read_mesh(garbage, "bodies.web.mesh.file")
+    message = str(error.value)
+    assert "'bodies.web.mesh.file'" in message and str(garbage) in message and "not a Gmsh file" in message
+    assert capsys.readouterr() == ("", "")
+
+
+def test_an_element_on_an_undefined_node_and_a_folder_are_said_as_such(tmp_path):
+    points, cells = _bar_tets()
+    meshio.write(tmp_path / "bar.inp", meshio.Mesh(points, [("tetra", cells)]))
+    lines = (tmp_path / "bar.inp").read_text().splitlines()
+    first = lines.index(next(line for line in lines if line.upper().startswith("*ELEMENT"))) + 1
+    number, nodes = lines[first].split(",", 1)
+    lines[first] = f"{number}, 99999," + nodes.split(",", 1)[1]
+    (tmp_path / "bad.inp").write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match="'bodies.cw.mesh.file': .*bad.inp: an element .*refers to node 99999, "
+                                         "which the file does not define"):
+        read_mesh(tmp_path / "bad.inp", "bodies.cw.mesh.file")
+    with pytest.raises(InputError, match="'bodies.cw.mesh.file': .* is a folder, not a mesh file"):
+        read_mesh(tmp_path, "bodies.cw.mesh.file")
