@@ -79,32 +79,112 @@ def _with_mesh_digest(table: dict, folder: Path, where: str) -> dict:
         raise InputError(f"{where}: 'mesh_digest' is computed from the file, not given")
     path = Path(table["mesh_file"])
     path = path if path.is_absolute() else folder / path
+    if path.is_dir():
+        raise InputError(f"{where}: {path} is a folder, not a mesh file: name a mesh file in it "
+                         "(Abaqus .inp, Gmsh .msh)")
     if not path.is_file():
         raise InputError(f"{where}: {path} does not exist")
     return {**table, "mesh_file": str(path.resolve()), "mesh_digest": hashlib.sha256(path.read_bytes()).hexdigest()}
 
 
-def model_params_from_mapping(table: dict, where: str = "[mbs]", folder: Path = Path(".")) -> ModelParams:
-    """ModelParams from a mapping shaped like the scene's [mbs] table (folder: base of relative files)."""
-    table = dict(table)
-    pressure = table.pop("gas_pressure", None)
+def _field_values(table: dict, where: str, folder: Path | None) -> dict:
+    """The ModelParams fields an [mbs] table gives: a value per top-level field, a dict of values
+    per sub-table; unknown keys refused. With ``folder`` the counterweight's mesh file is made
+    absolute and digested (:func:`_with_mesh_digest`); without it no file is read."""
     top_fields = {f.name for f in fields(ModelParams)}
     _checked(table, top_fields | {"gas_pressure"}, where)
     values = {}
     for name, value in table.items():
+        if name == "gas_pressure":
+            continue
         if name in _SUBTABLES:
-            kind = _SUBTABLES[name]
             if not isinstance(value, dict):
                 raise InputError(f"{where}.{name} must be a table")
-            _checked(value, {f.name for f in fields(kind)}, f"{where}.{name}")
-            if name == "counterweight" and "mesh_file" in value:
+            _checked(value, {f.name for f in fields(_SUBTABLES[name])}, f"{where}.{name}")
+            if folder is not None and name == "counterweight" and "mesh_file" in value:
                 value = _with_mesh_digest(value, folder, f"{where}.counterweight.mesh_file")
-            values[name] = replace(kind(), **{k: _as_field_value(v) for k, v in value.items()})
+            values[name] = {k: _as_field_value(v) for k, v in value.items()}
         elif name == "effects":
-            values[name] = frozenset(value)
+            values[name] = frozenset(value) if isinstance(value, list) else value
         else:
             values[name] = _as_field_value(value)
-    params = replace(ModelParams(), **values)
+    return values
+
+
+def _params(values: dict) -> ModelParams:
+    return replace(ModelParams(), **{name: replace(_SUBTABLES[name](), **value) if name in _SUBTABLES else value
+                                     for name, value in values.items()})
+
+
+def _refusal(values: dict) -> str | None:
+    """Why ModelParams refuses these values (its first complaint), or None."""
+    try:
+        _params(values).validate()
+    except InputError as error:
+        return str(error)
+    except (TypeError, ValueError) as error:  # a string or list where a number belongs
+        return f"a value of the wrong type ({error})"
+    return None
+
+
+def _without(values: dict, key: tuple) -> dict:
+    """``values`` without one key: (field,) or (sub-table, field)."""
+    if len(key) == 1:
+        return {name: value for name, value in values.items() if name != key[0]}
+    return {**values, key[0]: {k: v for k, v in values[key[0]].items() if k != key[1]}}
+
+
+def table_problems(values: dict) -> list[tuple[list[str], str]]:
+    """Every refusal of ModelParams, as (the dotted keys within [mbs] at fault, its reason).
+    ModelParams says why but not which key: at fault is a key that alone (the others at their
+    defaults) is refused for the same reason, or else, for a combination (crank_angles_deg of
+    another length than throws), each key whose default changes the answer. Each refusal's keys
+    are set aside before the next is sought."""
+    found = []
+    while (reason := _refusal(values)) is not None:
+        keys = [(name,) for name in values if name not in _SUBTABLES]
+        keys += [(name, key) for name in values if name in _SUBTABLES for key in values[name]]
+        culprits = ([key for key in keys if _refusal(_only(values, key)) == reason]
+                    or [key for key in keys if _refusal(_without(values, key)) != reason])
+        found.append(([".".join(key) for key in culprits], reason))
+        if not culprits:
+            break
+        for key in culprits:
+            values = _without(values, key)
+    return found
+
+
+def _only(values: dict, key: tuple) -> dict:
+    """One key of ``values``: (field,) or (sub-table, field)."""
+    return {key[0]: values[key[0]]} if len(key) == 1 else {key[0]: {key[1]: values[key[0]][key[1]]}}
+
+
+def _named(keys: list[str], reason: str, where: str, quote: str) -> str:
+    names = " or ".join(f"{quote}{where}.{key}{quote}" for key in keys) or f"{quote}{where}{quote}"
+    return f"{names}: {reason}"
+
+
+def mbs_table_problems(table, where: str = "mbs") -> list[str]:
+    """The problems of a scene's [mbs] table, each naming its key ('mbs.speed_rpm'), without
+    reading the files it names (the scene's validation)."""
+    if not isinstance(table, dict):
+        return [f"'{where}' must be a table"]
+    try:
+        values = _field_values(table, where, None)
+    except InputError as error:
+        return [str(error)]
+    return [_named(keys, reason, where, "'") for keys, reason in table_problems(values)]
+
+
+def model_params_from_mapping(table: dict, where: str = "[mbs]", folder: Path = Path(".")) -> ModelParams:
+    """ModelParams from a mapping shaped like the scene's [mbs] table (folder: base of relative files)."""
+    table = dict(table)
+    pressure = table.get("gas_pressure")
+    values = _field_values(table, where, folder)
+    problems = table_problems(values)
+    if problems:
+        raise InputError("; ".join(_named(keys, reason, where, "") for keys, reason in problems))
+    params = _params(values)
     if pressure is not None:
         params = _with_pressure_curve(params, pressure, folder, f"{where}.gas_pressure")
     params.validate()

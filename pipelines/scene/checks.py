@@ -8,6 +8,9 @@ Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
 
 from __future__ import annotations
 
+from contact.procedure import Procedure
+from mbs.scene import mbs_table_problems
+from reduction.mesh.generators import MAX_GENERATED_NODES, least_nodes
 from pipelines.scene.schema import (
     BODY_LOAD_KEYS,
     CONTACT_EFFECTS,
@@ -138,9 +141,11 @@ def _check_bodies(data, problems):
                 problems.append(f"'bodies.{name}.mesh.generator' '{generator}' is unknown"
                                 f"{_suggest(generator, MESH_GENERATORS)}")
             else:
-                for key in MESH_GENERATORS[generator]:
-                    if not isinstance(mesh.get(key), NUMBER) or mesh.get(key) <= 0:
-                        problems.append(f"'bodies.{name}.mesh.{key}' must be a positive number (mm or count)")
+                bad = [key for key in MESH_GENERATORS[generator]
+                       if not isinstance(mesh.get(key), NUMBER) or mesh.get(key) <= 0]
+                problems += [f"'bodies.{name}.mesh.{key}' must be a positive number (mm or count)" for key in bad]
+                if not bad:
+                    problems += _mesh_size_problems(name, mesh)
         elif "file" not in mesh:
             problems.append(f"'bodies.{name}.mesh' needs 'generator' or 'file'")
         fixed = body.get("fixed", [])
@@ -171,6 +176,25 @@ def _check_bodies(data, problems):
             position = ref.get("position")
             if not (isinstance(position, list) and len(position) == dim):
                 problems.append(f"'{where}.position' must be {dim} coordinates in mm")
+
+
+def _mesh_size_problems(name: str, mesh: dict) -> list[str]:
+    """A generated mesh too large to build (:data:`MAX_GENERATED_NODES`), counted before meshing:
+    most likely a contact size in metres."""
+    args = {key: value for key, value in mesh.items() if key != "generator"}
+    try:
+        found = least_nodes(mesh["generator"], args)
+    except (TypeError, ValueError, ZeroDivisionError):  # an extra argument of the wrong type: make_mesh says so
+        return []
+    if found is None or not found[0] > MAX_GENERATED_NODES:  # not: a NaN size is no count
+        return []
+    nodes, key = found
+    value = mesh[key]
+    hint = (f"{key} is in mm: if {value:g} was meant in metres, write {1e3 * value:g}" if key == "contact_size"
+            else "use fewer elements")
+    return [f"'bodies.{name}.mesh.{key}' = {value:g} would generate a mesh of at least {nodes:,.0f} nodes in its "
+            f"contact zone alone, more than the {MAX_GENERATED_NODES:,} a generated mesh may have (it would not "
+            f"fit in memory); {hint}"]
 
 
 def _check_contact(data, problems):
@@ -210,12 +234,64 @@ def _check_bolts(data, problems):
                 problems.append(f"'bolts.{name}.{end}' names '{bolt[end]}', which is not a reference point")
 
 
+def _held_groups(data) -> list[list[str]]:
+    """The bodies in groups joined by the contact or a bolt, each group a list of names."""
+    bodies, contact = list(data["bodies"]), data["contact"]
+    group = {name: {name} for name in bodies}
+    joins = [(contact["slave"].get("body"), contact["master"].get("body"))]
+    joins += [tuple(str(bolt.get(end, "")).partition(".")[0] for end in ("head", "nut"))
+              for bolt in data.get("bolts", {}).values() if isinstance(bolt, dict)]
+    for a, b in joins:
+        if isinstance(a, str) and isinstance(b, str) and a in group and b in group and group[a] is not group[b]:
+            merged = group[a] | group[b]
+            for name in merged:
+                group[name] = merged
+    groups = []
+    for name in bodies:
+        if group[name] not in groups:
+            groups.append(group[name])
+    return [[name for name in bodies if name in members] for members in groups]
+
+
+def _check_support(data, problems):
+    """Every group of bodies (joined by the contact or bolts) is held against rigid-body motion: one
+    of its bodies has a fixed selection, or [[motions]] prescribe each translation of the group.
+    Necessary, not sufficient (a support of one component leaves the others free)."""
+    translations = ("ux", "uy", "uz")[:data["scene"]["dimension"]]
+    motions = [str(entry.get("dof", "")).split(".") for entry in data.get("motions", [])
+               if isinstance(entry, dict)] if isinstance(data.get("motions", []), list) else []
+    for members in _held_groups(data):
+        if any(data["bodies"][name].get("fixed") for name in members):
+            continue
+        driven = {dof[-1] for dof in motions if len(dof) == 3 and dof[0] in members}
+        if set(translations) <= driven:
+            continue
+        names = " and ".join(f"'{name}'" for name in members)
+        who = f"body {names} has" if len(members) == 1 else f"bodies {names} (joined by the contact or bolts) have"
+        components = ", ".join(f'"{c}"' for c in translations)
+        problems.append(f"{who} no support: no 'bodies.NAME.fixed' selection and no [[motions]] prescribing "
+                        f"{', '.join(translations)}, so nothing holds them against rigid-body motion (their "
+                        f"stiffness is singular); add a fixed selection, e.g. bodies.{members[-1]}.fixed = "
+                        f"{{ nodes = {{ set = \"...\" }}, components = [{components}] }}")
+
+
 def _check_procedure(data, problems):
     procedure = data.get("procedure", {})
+    cycles = [procedure.get(key, getattr(Procedure, key)) for key in ("cof_cycles", "wear_cycles")]
+    if all(isinstance(n, int) and n == 0 for n in cycles):
+        problems.append("'procedure.cof_cycles' and 'procedure.wear_cycles' are both 0 (or not given): the "
+                        "run would end after the preload with no load cycle to judge; set cof_cycles (COF "
+                        "stabilisation cycles) or wear_cycles (wear cycles) to at least 1")
     run_up, cof_cycles = procedure.get("vibration_run_up", 0), procedure.get("cof_cycles", 0)
     if isinstance(run_up, int) and isinstance(cof_cycles, int) and run_up > cof_cycles:
         problems.append(f"'procedure.vibration_run_up' ({run_up}) must not exceed 'procedure.cof_cycles' "
                         f"({cof_cycles}): the vibration runs up within the COF phase")
+
+
+def _check_mbs(data, problems):
+    """The [mbs] table's values as the multibody model reads them (its files are read later)."""
+    if "mbs" in data:
+        problems += mbs_table_problems(data["mbs"])
 
 
 #: Semantic checks and the tables each reads (run when the schema found those tables sound).
@@ -224,7 +300,9 @@ SEMANTIC_CHECKS = ((_check_effects, ("scene", "materials", "bodies", "coupling")
                    (_check_contact, ("scene", "bodies", "contact")),
                    (_check_bolts, ("scene", "bodies", "bolts")),
                    (_check_patterns, ("materials", "bodies")),
-                   (_check_procedure, ("procedure",)))
+                   (_check_support, ("scene", "bodies", "contact", "bolts")),
+                   (_check_procedure, ("procedure",)),
+                   (_check_mbs, ()))
 
 
 # Plausibility: magnitudes that are valid but most likely a unit mistake. Each is a warning

@@ -3,6 +3,10 @@
 Every generator returns a scikit-fem mesh in mm. Grading puts the contact-zone element size
 where the contact is and grows geometrically away from it, so that closed forms (Hertz,
 Cattaneo-Mindlin) are resolved without paying for a uniformly fine body.
+
+:func:`least_nodes` counts, before any meshing, the nodes that the fine contact zone of a
+generated mesh alone would have: a scene whose mesh would exceed :data:`MAX_GENERATED_NODES`
+is refused (a contact size typed in metres, 0.01 for 10 mm, asks for hundreds of millions).
 """
 
 from __future__ import annotations
@@ -454,3 +458,64 @@ def web_block(width: float, depth: float, thickness: float, hub_width: float, sc
     plan += _graded_layers(reached, [hole_depth, depth], cell, coarse)
     keep_z = [-half_t, -hole_half_size, hole_half_size, half_t]
     return _layered(x, z, plan, keep_x, keep_z, fine_x, [(-half_t, half_t)], solids, voids, mirror=True)
+
+
+#: the most nodes a generated mesh may have. Assembling a body needs about 5 kB per hexahedron
+#: (its element matrices) and factorising it far more, so two million nodes is already beyond a
+#: workstation; the shipped meshes have a few thousand, a 1 mm counterweight joint some 10⁵.
+MAX_GENERATED_NODES = 2_000_000
+
+
+def _lines(length: float, size: float) -> float:
+    """Grid lines of a stretch of ``length`` cut into cells of at most ``size`` (mm), as a float
+    (a contact size typed in metres makes the count too large for an array)."""
+    return np.ceil(length / size - 1e-9) + 1.0
+
+
+def _hub_nodes(hub_width: float, thickness: float, screw_x: float, hole_half_size: float, contact_size: float,
+               layers: float, relief_half_width: float = 0.0, **_) -> float:
+    """Nodes of the fine hub face of :func:`counterweight_block` or :func:`web_block` (its pads
+    when relieved, less the screw holes) in ``layers`` node planes."""
+    face = (_lines(hub_width - 2.0 * relief_half_width, contact_size) * _lines(thickness, contact_size)
+            - 2.0 * (_lines(2.0 * hole_half_size, contact_size) - 2.0) ** 2)
+    return max(face, 0.0) * layers
+
+
+def _counterweight_nodes(hub_height: float, contact_size: float, **args) -> float:
+    return _hub_nodes(contact_size=contact_size, layers=3.0 if 2.0 * contact_size <= hub_height else 2.0, **args)
+
+
+def _web_nodes(hole_depth: float, contact_size: float, **args) -> float:
+    return _hub_nodes(contact_size=contact_size, layers=3.0 if 2.0 * contact_size <= hole_depth else 2.0, **args)
+
+
+def _block_2d_nodes(contact_half_width: float, contact_size: float, **_) -> float:
+    n_half = max(1.0, np.round(contact_half_width / contact_size))
+    return (2.0 * n_half + 1.0) * (n_half + 1.0)
+
+
+def _beam_nodes(width: float, contact_size: float, pad_half_length: float, layers: int = 6, **_) -> float:
+    return _lines(2.0 * pad_half_length + 4.0 * contact_size, contact_size) * _lines(width, contact_size) * (layers + 1)
+
+
+def _flat_nodes(n_x: float, n_y: float, n_z: float, **_) -> float:
+    return (n_x + 1.0) * (n_y + 1.0) * (n_z + 1.0)
+
+
+_FINE_NODES = {"counterweight_block": ("contact_size", _counterweight_nodes),
+               "web_block": ("contact_size", _web_nodes),
+               "plane_block": ("contact_size", _block_2d_nodes),
+               "cylinder_block": ("contact_size", _block_2d_nodes),
+               "beam_with_hole": ("contact_size", _beam_nodes),
+               "flat_block": ("n_x", _flat_nodes)}
+
+
+def least_nodes(generator: str, args: dict) -> tuple[float, str] | None:
+    """(nodes, key): about how many nodes the fine zone of the mesh that ``generator`` makes
+    from ``args`` (its keyword arguments, mm) has, a lower bound of the mesh's count found
+    without meshing, and the key that sets it (``contact_size``, or ``n_x`` of a flat block);
+    None for a generator without an estimate."""
+    if generator not in _FINE_NODES:
+        return None
+    key, count = _FINE_NODES[generator]
+    return float(count(**args)), key

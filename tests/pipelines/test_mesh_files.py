@@ -99,6 +99,9 @@ name = "hold_y"
 dof = "cylinder.rp.uy"
 value = 0.0
 history = "constant"
+
+[procedure]
+cof_cycles = 1
 """
 
 
