@@ -116,8 +116,12 @@ def _file_counterweight(scene: Scene, base: Path) -> dict:
                          f"mesh: select its contact surface by a named set ('contact.{(roles or ['slave'])[0]}.set'), "
                          "which becomes the multibody interface")
     material = scene.data["materials"][body["material"]]
-    path = Path(body["mesh"]["file"])
-    return {"mesh_file": str((base / path).resolve()), "interface": face,
+    path = (base / Path(body["mesh"]["file"])).resolve()
+    if not path.is_file():
+        # said here, before the multibody stage reads it, in the scene's own key
+        raise InputError(f"'bodies.{name}.mesh.file': {path} "
+                         + ("is a folder, not a mesh file" if path.is_dir() else "does not exist"))
+    return {"mesh_file": str(path), "interface": face,
             "youngs_modulus": material["youngs_modulus"], "poisson_ratio": material["poisson_ratio"],
             "density": material["density"]}
 

@@ -64,12 +64,31 @@ def parse(text: str, source: str = "scene", path: Path | None = None) -> Scene:
     return Scene(data, path)
 
 
-def _merged(base: dict, own: dict) -> dict:
-    """``own`` on top of ``base``: tables merge key by key, anything else is replaced."""
+#: the keys that say which kind a body's mesh table is: a scene that extends a base and gives a
+#: mesh of the other kind replaces the base's mesh table instead of merging into it (a generated
+#: block's dimensions mean nothing to a mesh file, and TOML cannot delete a key)
+MESH_KINDS = ("generator", "file")
+
+
+def _merged(base: dict, own: dict, path: tuple = ()) -> dict:
+    """``own`` on top of ``base``: tables merge key by key, anything else is replaced; a body's
+    ``mesh`` table of another kind (:data:`MESH_KINDS`) replaces the base's."""
     out = dict(base)
     for key, value in own.items():
-        out[key] = _merged(base[key], value) if isinstance(value, dict) and isinstance(base.get(key), dict) else value
+        here = path + (key,)
+        if isinstance(value, dict) and isinstance(base.get(key), dict) and not _other_mesh_kind(here, base[key], value):
+            out[key] = _merged(base[key], value, here)
+        else:
+            out[key] = value
     return out
+
+
+def _other_mesh_kind(path: tuple, base: dict, own: dict) -> bool:
+    """Whether ``own`` is a body's mesh table (``bodies.NAME.mesh``) of another kind than ``base``."""
+    if len(path) != 3 or path[0] != "bodies" or path[2] != "mesh":
+        return False
+    kind = [k for k in MESH_KINDS if k in own]
+    return bool(kind) and not any(k in base for k in kind)
 
 
 #: keys whose values are files, relative to the scene file that writes them ("*": any name)
@@ -118,6 +137,9 @@ def _read(path: Path, seen: tuple = ()) -> dict:
     if base is None:
         return data
     base_path = (path.parent / base).resolve()
+    if base_path.is_dir() or not base_path.is_file():
+        raise InputError(f"{path}: 'scene.base' names {base_path}, which "
+                         + ("is a folder, not a scene file" if base_path.is_dir() else "does not exist"))
     if base_path in seen:
         raise InputError(f"{path}: 'scene.base' chain loops back to {base_path}")
     merged = _merged(_anchored(_read(base_path, seen + (base_path,)), base_path.parent), data)
