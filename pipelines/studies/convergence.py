@@ -49,7 +49,9 @@ def size_overrides(data: dict, size_mm: float) -> dict:
                  for name, body in data.get("bodies", {}).items()
                  if isinstance(body.get("mesh"), dict) and "contact_size" in body["mesh"]}
     if not overrides:
-        raise ValueError("no body mesh of the scene has a contact_size to refine (mesh files are fixed)")
+        raise InputError("no body mesh of the scene has a contact_size to refine: a mesh read from a file is "
+                         "fixed, so a convergence study needs generated meshes (bodies.NAME.mesh.generator with "
+                         "contact_size), or run the scene once per mesh file you made at each size")
     return overrides
 
 

@@ -207,3 +207,19 @@ def test_a_size_the_meshes_refuse_is_said_before_any_level_runs(tmp_path, capsys
     said = capsys.readouterr().err
     assert "--sizes: 2 mm does not suit body" in said and "multiples of the contact element size" in said
     assert not list(out.glob("size_*"))
+
+
+
+def test_a_scene_of_mesh_files_is_refused_with_the_way_out(tmp_path, capsys):
+    """Mesh files are fixed: the study says so as an input error (exit 2), not an internal one."""
+    from pathlib import Path
+
+    from pipelines.cli.main import main
+    from reduction.errors import InputError
+
+    with pytest.raises(InputError, match="generated meshes"):
+        size_overrides({"bodies": {"cw": {"mesh": {"file": "cw.inp"}}}}, 5.0)
+    scene = Path(__file__).resolve().parents[2] / "examples" / "user_joint.toml"
+    assert main(["study", "convergence", str(scene), "--sizes", "10,5", "--workers", "0",
+                 "--out", str(tmp_path / "out")]) == 2
+    assert "generated meshes" in capsys.readouterr().err
