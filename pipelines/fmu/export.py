@@ -23,6 +23,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import uuid
 import warnings
 import zipfile
 from pathlib import Path
@@ -161,15 +162,19 @@ def _add_binary(fmu_dir: Path, fmi_version: int, identifier: str, compiler: str 
 
 
 def _zip_atomically(fmu_dir: Path, output_path: Path) -> None:
-    """Zip into a temporary file beside output_path, then rename: no partial FMU is ever visible."""
-    handle, temporary = tempfile.mkstemp(prefix=f".{output_path.name}.", suffix=".part", dir=output_path.parent)
-    os.close(handle)
+    """Zip into a temporary file beside output_path, then rename: no partial FMU is ever visible.
+
+    The temporary file is opened exclusively under a fresh name rather than by mkstemp, whose
+    files are private (0600): renamed, the FMU would keep that mode instead of the one the user's
+    umask gives every other output."""
+    temporary = output_path.parent / f".{output_path.name}.{uuid.uuid4().hex[:12]}.part"
+    stream = open(temporary, "xb")
     try:
         # Level 1: float tables compress little, and higher levels cost seconds on large exports.
-        with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as archive:
+        with stream, zipfile.ZipFile(stream, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as archive:
             for path in sorted(fmu_dir.rglob("*")):
                 archive.write(path, path.relative_to(fmu_dir).as_posix())
         os.replace(temporary, output_path)
     except BaseException:
-        Path(temporary).unlink(missing_ok=True)
+        temporary.unlink(missing_ok=True)
         raise

@@ -4,7 +4,9 @@ Sample times are multiples of 1/64 s and the FMPy output grid is 1/256 s, both e
 floating point, so the simulation lands on every sample time exactly and three points between.
 """
 
+import os
 import shutil
+import stat
 import time as clock
 import zipfile
 
@@ -207,6 +209,20 @@ def test_source_only_fmu_without_compiler(results_file, tmp_path, fmi_version):
     assert not any(name.startswith("binaries/") for name in names)
     assert f"sources/fmi{fmi_version}_player.c" in names
     assert validate_fmu(str(path)) == []
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o002])
+def test_the_fmu_has_the_mode_the_umask_gives_every_output(results_file, tmp_path, umask):
+    previous = os.umask(umask)
+    try:
+        with pytest.warns(SourceOnlyFmuWarning):
+            path = export_fmu(results_file, tmp_path / "loads.fmu", fmi_version=3, compiler="no-such-cc")
+        (tmp_path / "beside.txt").write_text("an ordinary output")
+    finally:
+        os.umask(previous)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o666 & ~umask
+    assert stat.S_IMODE(path.stat().st_mode) == stat.S_IMODE((tmp_path / "beside.txt").stat().st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["beside.txt", "loads.fmu"]  # no temporary left
 
 
 def test_source_only_fmu_builds_with_fmpy(results_file, history, tmp_path):
