@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -92,15 +93,59 @@ def _um(amplitude_mm: float | None) -> float | None:
     return None if amplitude_mm is None else float(1e3 * amplitude_mm)
 
 
+#: The top of an amplitude range below which it was probably typed in mm: the wing amplitudes a
+#: joint is rated against are tens to hundreds of µm, and the scene's own wing_amplitude is
+#: flagged below 1 µm too (:func:`pipelines.scene.checks.plausibility`).
+SMALLEST_RANGE_TOP_UM = 1.0
+
+
 def parse_range_um(text: str) -> tuple[float, float]:
-    """'100:400' (µm) → (0.1, 0.4) mm."""
+    """'100:400' (µm) → (0.1, 0.4) mm. A range that tops below :data:`SMALLEST_RANGE_TOP_UM` is
+    refused as a likely mm-for-µm mistake: every run of such a range is stuck, and the search would
+    report a limit above a range nobody meant."""
     try:
         low, high = (float(v) for v in text.split(":"))
     except ValueError:
         raise InputError(f"--amplitude {text!r}: use LOW:HIGH in µm, e.g. 100:400") from None
     if not 0 < low < high:
         raise InputError(f"--amplitude {text!r}: needs 0 < LOW < HIGH (µm)")
+    if high < SMALLEST_RANGE_TOP_UM:
+        raise InputError(f"--amplitude {text!r} tops at {high:g} µm, below {SMALLEST_RANGE_TOP_UM:g} µm: probably "
+                         f"mm (µm expected: {low:g}:{high:g} mm is --amplitude {1e3 * low:g}:{1e3 * high:g})")
     return 1e-3 * low, 1e-3 * high
+
+
+def check_search(low_mm: float, high_mm: float, tolerance_mm: float, grid: int = 7) -> None:
+    """The search's range (mm), tolerance (mm) and grid, every problem in one InputError.
+
+    A tolerance as wide as the range is refused: the search could only say that the limit lies
+    somewhere in the range, which the range already says."""
+    problems = []
+    if not 0 < low_mm < high_mm:
+        problems.append("the amplitude range needs 0 < low < high")
+    if tolerance_mm <= 0:
+        problems.append("the limit tolerance must be positive")
+    elif 0 < low_mm < high_mm and tolerance_mm >= (1 - 1e-9) * (high_mm - low_mm):  # µm → mm rounds
+        width = high_mm - low_mm
+        problems.append(f"the limit tolerance, {format_um(tolerance_mm)} µm, is not narrower than the amplitude "
+                        f"range {format_um(low_mm, width)}:{format_um(high_mm, width)} µm "
+                        f"({format_um(width, width)} µm wide): give a tolerance below the range's width")
+    if grid < 2:
+        problems.append("the amplitude grid needs at least 2 amplitudes")
+    if problems:
+        raise InputError("; ".join(problems))
+
+
+def format_um(amplitude_mm: float, tolerance_mm: float | None = None) -> str:
+    """An amplitude (mm) in µm, without the unit, with the digits that tell it apart: at least
+    one decimal, two significant digits below 1 µm, and the tolerance's decimals when given."""
+    um = 1e3 * amplitude_mm
+    decimals = 1
+    if 0 < abs(um) < 1:
+        decimals = max(decimals, 1 - math.floor(math.log10(abs(um))))
+    if tolerance_mm:
+        decimals = max(decimals, -math.floor(math.log10(1e3 * tolerance_mm)))
+    return f"{um:.{decimals}f}"
 
 
 def coupled_scene(scene_path, overrides: dict | None = None):
@@ -190,12 +235,7 @@ def find_limit(scene_path, low_mm: float, high_mm: float, *, tolerance_mm: float
     from pipelines.parallel import cluster, map_cases
 
     coupled_scene(scene_path, overrides)  # bad input is said before any run
-    if not 0 < low_mm < high_mm:
-        raise InputError("amplitude range needs 0 < low < high")
-    if tolerance_mm <= 0:
-        raise InputError("the limit tolerance must be positive")
-    if grid < 2:
-        raise InputError("the amplitude grid needs at least 2 amplitudes")
+    check_search(low_mm, high_mm, tolerance_mm, grid)
     parallel = max(1, workers if workers else (cpu_count() if scheduler is None else 2))
     search = (scene_path, low_mm, high_mm, tolerance_mm, grid, overrides, cache_dir, out_dir)
     if workers == 0:
@@ -223,8 +263,8 @@ def _search(scene_path, low_mm, high_mm, tolerance_mm, grid, overrides, cache_di
                 AmplitudeRun(outcome.key, None, {}, outcome.error)
         failed = [runs[a] for a in amplitudes if runs[a].verdict is None]
         if failed:
-            raise InputError("the limit search cannot continue: the run at "
-                             + "; ".join(f"{1e3 * r.amplitude_mm:.1f} µm failed ({r.error})" for r in failed))
+            raise InputError("the limit search cannot continue: the run at " + "; ".join(
+                f"{format_um(r.amplitude_mm, tolerance_mm)} µm failed ({r.error})" for r in failed))
         return {a: runs[a].verdict for a in amplitudes}
 
     found = scan(evaluate, low_mm, high_mm, tolerance_mm=tolerance_mm, grid=grid, parallel=parallel)
@@ -276,11 +316,15 @@ def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
 def describe_limit(result: LimitResult) -> str:
     """The limit in one line: where it lies, and whether the verdict is monotone."""
     low, high = result.range_mm
+
+    def um(amplitude_mm):
+        return format_um(amplitude_mm, result.tolerance_mm)
+
     if result.limit_mm is None:
-        return f"stuck up to {1e3 * high:.0f} µm: the limit lies above the range"
+        return f"stuck up to {um(high)} µm: the limit lies above the range"
     if result.bracket_mm[0] is None:
-        return f"not stuck even at {1e3 * low:.0f} µm: the limit lies below the range"
-    text = (f"limit {1e3 * result.limit_mm:.1f} µm (not stuck; {1e3 * result.bracket_mm[0]:.1f} µm is stuck)")
+        return f"not stuck even at {um(low)} µm: the limit lies below the range"
+    text = f"limit {um(result.limit_mm)} µm (not stuck; {um(result.bracket_mm[0])} µm is stuck)"
     return text if result.monotone else text + ", NOT MONOTONE: stuck again above it"
 
 

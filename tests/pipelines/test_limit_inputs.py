@@ -1,0 +1,59 @@
+"""The limit search's inputs: a range typed in mm, a tolerance as wide as the range, and the
+digits an amplitude is printed with."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from pipelines.cli.main import main
+from pipelines.jobs import limit as limits
+from reduction.errors import InputError
+
+SCENE = Path(__file__).resolve().parents[2] / "examples" / "counterweight.toml"
+
+
+def _no_run(*args, **kwargs):
+    raise AssertionError("a contact run started")
+
+
+def test_a_range_typed_in_mm_is_refused_before_any_run(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(limits, "run_amplitude", _no_run)
+    assert main(["limit", str(SCENE), "--amplitude", "0.1:0.4", "--workers", "0", "--cache", str(tmp_path),
+                 "--out", str(tmp_path / "o")]) == 2
+    error = capsys.readouterr().err
+    assert error.startswith("fretwork: error:") and "below 1 µm: probably mm" in error
+    assert "--amplitude 100:400" in error  # what the user meant, in the unit the option takes
+    assert limits.parse_range_um("1:400") == (0.001, 0.4)  # 1 µm and up is taken as typed
+
+
+def test_a_tolerance_not_narrower_than_the_range_is_refused_before_any_run(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(limits, "run_amplitude", _no_run)
+    with pytest.raises(InputError, match=r"tolerance, 10\.0 µm, is not narrower than the amplitude range "
+                                         r"100\.0:105\.0 µm \(5\.0 µm wide\)"):
+        limits.find_limit(SCENE, 0.1, 0.105, tolerance_mm=0.01, cache_dir=str(tmp_path), workers=0, progress=False)
+    assert main(["limit", str(SCENE), "--amplitude", "100:400", "--tolerance", "300", "--workers", "0",
+                 "--cache", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
+    assert "not narrower than the amplitude range" in capsys.readouterr().err
+
+
+def test_every_problem_of_a_search_is_said_at_once():
+    with pytest.raises(InputError) as refused:
+        limits.check_search(0.4, 0.1, 0.0, grid=1)
+    assert str(refused.value).count(";") == 2  # range, tolerance, grid
+
+
+def test_amplitudes_below_a_micrometre_keep_their_digits():
+    result = limits.LimitResult(None, (None, None), 0.0001, range_mm=(0.0001, 0.0004))
+    assert limits.describe_limit(result) == "stuck up to 0.40 µm: the limit lies above the range"
+    stuck_low = limits.LimitResult(0.0001, (None, 0.0001), 0.0001, range_mm=(0.0001, 0.0004))
+    assert limits.describe_limit(stuck_low) == "not stuck even at 0.10 µm: the limit lies below the range"
+
+
+def test_amplitudes_are_printed_to_the_tolerance():
+    assert limits.format_um(0.2637) == "263.7"  # 10 µm tolerance or none: one decimal, as before
+    assert limits.format_um(0.2637, 0.01) == "263.7"
+    assert limits.format_um(0.26374, 0.00005) == "263.74"  # a 0.05 µm tolerance: its two decimals
+    assert limits.format_um(0.0004) == "0.40"
+    assert limits.format_um(0.000004) == "0.0040"
