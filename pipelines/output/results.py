@@ -52,7 +52,9 @@ bytes.) After every checkpoint the run goes on in a part file made anew from ``c
 (its groups copied into a fresh file), and a resumed run starts from the same copy: it ends
 with the same bytes as the uninterrupted run, and no bigger. (Deleting ``/checkpoint`` from a
 copy of ``checkpoint.h5``, as it was, left its space in the file: a counterweight run of 260
-cycles, 4.56 MB uninterrupted, was 7.12 MB after two resumes; now 4.79 MB either way.)
+cycles, 4.56 MB uninterrupted, was 7.12 MB after two resumes; now 4.79 MB either way.) A
+finished file is copied once more into a fresh one before it is moved into place: blocks
+appended one by one leave unused space behind, about 40 % of that file.
 """
 
 from __future__ import annotations
@@ -221,12 +223,7 @@ class ResultsWriter(Observer):
         ``/checkpoint`` left out. Done after every checkpoint as well as on resume, so that a
         resumed run goes on from the very bytes the uninterrupted run went on from, and ends with
         the same file (a copy with ``/checkpoint`` deleted would keep the freed space)."""
-        with h5py.File(self.checkpoint_path, "r") as source, h5py.File(self.part_path, "w") as part:
-            for name in source.attrs:
-                part.attrs.create(name, source.attrs[name], dtype=source.attrs.get_id(name).dtype)
-            for name in source:
-                if name != "checkpoint":
-                    source.copy(source[name], part, name=name)
+        _copy_fresh(self.checkpoint_path, self.part_path, leave_out=("checkpoint",))
         self.file = h5py.File(self.part_path, "a")
 
     def checkpoint(self, snapshot) -> None:
@@ -386,7 +383,12 @@ class ResultsWriter(Observer):
         self._flush()
         self.file.attrs.update(complete=True, ending=ending.value)
         self.file.close()
-        self.part_path.replace(self.final_path)
+        # the rows were appended block by block, each compressed block leaving unused space
+        # behind; a fresh copy holds the same datasets in about 60 % of the bytes
+        compact = self.part_path.with_suffix(".compact")
+        _copy_fresh(self.part_path, compact)
+        compact.replace(self.final_path)
+        self.part_path.unlink()
         self.checkpoint_path.unlink(missing_ok=True)
         return self.final_path
 
@@ -395,6 +397,18 @@ class ResultsWriter(Observer):
         if self.file.id.valid:
             self._flush()
             self.file.close()
+
+
+def _copy_fresh(source_path: Path, target_path: Path, leave_out: tuple = ()) -> None:
+    """Copy an HDF5 file's root attributes (with their exact types) and groups, but those named
+    in ``leave_out``, into a fresh file at ``target_path``: no freed or unused space is carried
+    over, and the same source gives the same bytes."""
+    with h5py.File(source_path, "r") as source, h5py.File(target_path, "w") as target:
+        for name in source.attrs:
+            target.attrs.create(name, source.attrs[name], dtype=source.attrs.get_id(name).dtype)
+        for name in source:
+            if name not in leave_out:
+                source.copy(source[name], target, name=name)
 
 
 def read_summary(path: str | Path) -> dict:
