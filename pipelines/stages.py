@@ -9,7 +9,8 @@ atomically (temporary file + rename): an interrupted run never leaves a half-wri
 ``EXECUTIONS`` counts the stages actually computed in this process (tests use it to prove that
 a command runs only the stages it needs). The directory comes from ``--cache``, else the
 environment variable ``FRETWORK_CACHE``, else ``.fretwork-cache`` in the working directory;
-``None`` switches caching off.
+``None`` switches caching off. :func:`check_directory` says before any stage runs when the
+directory cannot hold the cache (a file, not writable), naming the way out.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ from pathlib import Path
 from typing import Callable, TypeVar
 
 import numpy as np
+
+from reduction.errors import InputError
 
 EXECUTIONS: Counter = Counter()
 T = TypeVar("T")
@@ -67,6 +70,18 @@ def stage_key(stage: str, inputs) -> str:
 
 def default_directory() -> Path:
     return Path(os.environ.get("FRETWORK_CACHE", ".fretwork-cache"))
+
+
+def check_directory(directory: str | Path) -> Path:
+    """``directory`` as a folder the stage cache can be kept in (it may not exist yet); an
+    InputError naming the stage cache and the way out if not."""
+    from pipelines.output.locks import check_folder
+
+    try:
+        return check_folder(directory, "the stage cache")
+    except InputError as error:
+        raise InputError(f"{error}; or keep the cache in another folder with --cache DIR (or FRETWORK_CACHE=DIR), "
+                         "or run without it: --no-cache") from None
 
 
 class StageCache:

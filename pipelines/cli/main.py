@@ -31,9 +31,15 @@ def _json(value) -> str:
 
 
 def _cache(args):
-    from pipelines.stages import default_directory
+    """The stage cache folder of the command (None: --no-cache), checked: a file or a folder that
+    cannot be written is an InputError before any stage runs."""
+    from pipelines.stages import check_directory, default_directory
 
-    return None if getattr(args, "no_cache", False) else (args.cache or str(default_directory()))
+    if getattr(args, "no_cache", False):
+        return None
+    directory = args.cache or str(default_directory())
+    check_directory(directory)
+    return directory
 
 
 def _add_cache_arguments(parser) -> None:
@@ -64,11 +70,15 @@ def cmd_report(args) -> int:
     return 0
 
 
+#: Area fractions are sums of point areas over the nominal area: a whole area can sum to 1 + 2e-16.
+_ROUNDING = 1e-9
+
+
 def _widened(*fractions) -> str:
     """The note that explains area fractions above 100 %: they refer to the contact area closed
     after the preload, and wear, or a contact patch that moves as the bodies slide, can bring
     points beyond it into contact."""
-    if max((f for f in fractions if f is not None), default=0.0) <= 1.0:
+    if max((f for f in fractions if f is not None), default=0.0) <= 1.0 + _ROUNDING:
         return ""
     return (" (above 100 %: points beyond the area closed after the preload came into contact, as wear "
             "widened the contact or the contact patch moved)")
@@ -259,8 +269,8 @@ def _sizes(text: str) -> list[float]:
         sizes = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise InputError(f"--sizes {text!r}: use element sizes in mm separated by commas, e.g. 10,5,2.5") from None
-    if len(sizes) < 2 or min(sizes) <= 0:
-        raise InputError(f"--sizes {text!r}: needs at least two positive element sizes (mm)")
+    if len(set(sizes)) < 2 or min(sizes) <= 0:
+        raise InputError(f"--sizes {text!r}: needs at least two different positive element sizes (mm)")
     return sizes
 
 
@@ -507,6 +517,10 @@ OUTPUTS = {
     "validate": ("wear_gap_vs_geometry.png",),
     "reduce": ("reduction_error_vs_modes.png",),
 }
+#: Commands whose one output is written anew under its name: it is not removed before they run,
+#: so that an input refused only once the command runs (a mode count above what the mesh's
+#: interior has, known after reading the mesh) loses nothing.
+WRITTEN_ANEW = ("reduce",)
 
 
 def _command(args) -> str:
@@ -529,8 +543,9 @@ def _check_input(args) -> None:
     if isinstance(getattr(args, "speeds", None), str):
         from pipelines.jobs.sweep import parse_speeds
         parse_speeds(args.speeds)
-    if isinstance(getattr(args, "sizes", None), str):
-        _sizes(args.sizes)
+    sizes = _sizes(args.sizes) if isinstance(getattr(args, "sizes", None), str) else None
+    if hasattr(args, "cache") and getattr(args, "margins", True):  # `sweep` uses it with --margins only
+        _cache(args)
     path = getattr(args, "scene", None)
     if path is None:
         return
@@ -540,6 +555,9 @@ def _check_input(args) -> None:
         data = scenes.tables(path)
     else:
         data = scenes.load(path).data
+    if sizes is not None:
+        from pipelines.studies.convergence import check_levels
+        check_levels(path, sizes)  # every size suits the scene's mesh generators
     for message in plausibility(data):
         _warn(message)
 
@@ -552,13 +570,17 @@ def _output(args):
         check_folder(Path(args.output).parent, "-o")
         return nullcontext()
     if args.command == "report":  # --out is the HTML file (default: in the results folder)
-        check_folder(Path(args.out).parent if args.out else args.results_dir, "--out")
+        if args.out is not None:
+            check_folder(Path(args.out).parent, "--out")
+        elif Path(args.results_dir).is_dir():  # else write_report says what RESULTS_DIR should be
+            check_folder(args.results_dir, "the results folder")
         return nullcontext()
     out = getattr(args, "out", None)
     if out is None:
         _check_input(args)
         return nullcontext()
-    outputs = () if getattr(args, "resume", False) else OUTPUTS.get(_command(args), ())
+    outputs = OUTPUTS.get(_command(args), ())
+    clear = not getattr(args, "resume", False) and args.command not in WRITTEN_ANEW
     if args.command == "sweep":
         from pipelines.jobs.sweep import sweep_paths
 
@@ -571,7 +593,7 @@ def _output(args):
         out = folder
     # only `run` resumes: elsewhere a checkpoint of an interrupted run is a half-written output
     partial = PARTIAL if args.command == "run" else (*PARTIAL, "**/checkpoint.h5")
-    return claim(out, outputs=outputs, ready=lambda: _check_input(args), partial=partial)
+    return claim(out, outputs=outputs, clear=clear, ready=lambda: _check_input(args), partial=partial)
 
 
 def _unexpected(error: BaseException) -> str:
@@ -590,8 +612,11 @@ def _stopped_hint(args, error) -> str:
     if ending in EARLY_ENDINGS:
         return f"; the results file holds the cycles run so far, marked '{ending.value}'"
     out = getattr(args, "out", None)
-    return (f"; partial results stay in {out}: after changing the scene, run again "
-            "(or --resume from its last checkpoint)") if out else ""
+    if not out:
+        return ""
+    resumable = args.command == "run" and (Path(out) / "checkpoint.h5").is_file()
+    return (f"; partial results stay in {out}: after changing the scene, run again"
+            + (" (or --resume from its last checkpoint)" if resumable else ""))
 
 
 def _interrupt(signum, frame):

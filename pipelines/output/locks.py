@@ -2,15 +2,28 @@
 
 :func:`claim` is what every command does with its ``--out`` folder before it computes anything:
 
-- the folder must be a place for results: not a file, not below a file, not in a system folder
-  (/proc, /sys, /dev), writable; anything else is an :class:`InputError` naming the option;
+- the folder must be a place for results: given (not empty), not a file, not below a file, not
+  in or below a system folder (/proc, /sys, /dev, /usr, /etc, /bin, /sbin, /lib, /lib64, /boot),
+  not itself a folder that holds other people's folders (/, /var, /root, /home, the user's home:
+  a folder below them is fine), writable; anything else is an :class:`InputError` naming the
+  option;
 - a lock file (``.fretwork.lock``, holding the process id) marks the folder in use: a second
   command into the same folder is refused while the first runs; the lock of a process that no
   longer exists (killed, machine restarted) is stale and taken over;
-- the outputs an earlier run of the command left there (its ``outputs``: names or glob
-  patterns) are removed, said in one note line, so that old plots never stand beside new ones;
-  only once the command's input has been checked (``ready``): a refused input loses nothing;
-- when the command is interrupted (Ctrl-C), its half-written files (``*.part``, ``*.tmp``) go;
+- fretwork removes only what provably came from fretwork. Whatever a command wrote into the
+  folder (the files below its ``outputs``: names or glob patterns) is listed, when the command
+  ends in any way, in the folder's manifest ``.fretwork-outputs`` (one file a line: its
+  modification time and size, its path relative to the folder). A file is fretwork's when the
+  manifest lists it and it is unchanged since (a file the user wrote over is not), or when it
+  says so itself: an HDF5 file whose root attribute ``fretwork_format`` starts with "fretwork-"
+  (results, checkpoint, multibody and sweep files), or a page of ``fretwork report``. Where the
+  command writes, a file that is not fretwork's is never removed: the command is refused, naming
+  the files and the way out (another folder, or remove them yourself);
+- the outputs an earlier run of the command left there are then removed, said in one note line,
+  so that old plots never stand beside new ones; only once the command's input has been
+  checked (``ready``): a refused input loses nothing;
+- when the command is interrupted (Ctrl-C), its half-written files (``*.part``, ``*.tmp``
+  written since the claim) go;
 - when the command fails, the folders the claim created are removed again if they are empty:
   a refused input leaves nothing behind.
 """
@@ -28,12 +41,24 @@ from pathlib import Path
 from reduction.errors import InputError
 
 LOCK_NAME = ".fretwork.lock"
-#: Kernel and device folders: never a place for results.
-SYSTEM_FOLDERS = (Path("/proc"), Path("/sys"), Path("/dev"))
+#: The list of the files fretwork wrote into the folder: the only ones, with the files that say
+#: they are fretwork's, that a command removes.
+MANIFEST_NAME = ".fretwork-outputs"
+#: Kernel, device and system-software folders: neither they nor anything below them is a place
+#: for results.
+SYSTEM_FOLDERS = tuple(Path(p) for p in ("/proc", "/sys", "/dev", "/usr", "/etc", "/bin", "/sbin", "/lib",
+                                         "/lib64", "/boot"))
+#: Folders that hold other folders: a place for results may lie below them, never be one of them
+#: (the user's home is one too, see :func:`_shared_folders`).
+SHARED_FOLDERS = tuple(Path(p) for p in ("/", "/var", "/root", "/home"))
 #: Half-written files, removed when a command is interrupted: a results file being written
 #: (results.h5.part: the run's whole files are its results.h5 and checkpoint.h5) and the
 #: temporary files of atomic writes.
 PARTIAL = ("**/*.part", "**/*.tmp")
+#: The title that begins every page of ``fretwork report`` (pipelines.output.report): what
+#: makes a report.html provably fretwork's.
+REPORT_TITLE = "fretwork report: "
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 #: A lock file younger than this without a process id is being written by its owner.
 _FRESH_LOCK_S = 10.0
 
@@ -42,14 +67,30 @@ def _note(text: str) -> None:
     print(f"fretwork: note: {text}", file=sys.stderr)
 
 
+def _shared_folders() -> list[Path]:
+    folders = [folder.resolve() for folder in SHARED_FOLDERS]
+    try:
+        folders.append(Path.home().resolve())
+    except RuntimeError:  # no home folder known
+        pass
+    return folders
+
+
 def check_folder(path, option: str = "--out") -> Path:
     """``path`` as a folder results can be written to (it may not exist yet); InputError if not."""
+    if not str(path).strip():
+        raise InputError(f"{option} is empty: give a folder for the results (it is created if missing), "
+                         f"e.g. {option} results")
     path = Path(path)
     resolved = path.expanduser().resolve()
     for system in SYSTEM_FOLDERS:
+        system = system.resolve()
         if resolved == system or system in resolved.parents:
             raise InputError(f"{option} {path}: {system} is a system folder, not a place for results; "
                              "give a folder of your own")
+    if resolved in _shared_folders():
+        raise InputError(f"{option} {path}: {resolved} holds other folders, not a place for results; give a "
+                         f"folder of its own, e.g. {option} {resolved / 'fretwork-results'}")
     existing = resolved
     while not existing.exists():
         existing = existing.parent
@@ -119,8 +160,99 @@ def _make(folder: Path, option: str) -> list[Path]:
     return missing
 
 
+def _stamp(path: Path) -> str:
+    """What a file was when fretwork recorded it: its modification time (ns) and size."""
+    status = path.lstat()
+    return f"{status.st_mtime_ns} {status.st_size}"
+
+
+def _recorded(folder: Path) -> dict[str, str]:
+    """The files the manifest lists (paths relative to ``folder``) with their stamps."""
+    try:
+        lines = (folder / MANIFEST_NAME).read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):  # none yet, or unreadable: nothing is recorded
+        return {}
+    entries = [line.split(" ", 2) for line in lines if line and not line.startswith("#")]
+    return {entry[2]: f"{entry[0]} {entry[1]}" for entry in entries if len(entry) == 3}
+
+
+def _record(folder: Path, entries: dict[str, str]) -> None:
+    """Write the manifest (atomically); none when nothing is recorded."""
+    manifest = folder / MANIFEST_NAME
+    try:
+        if not entries:
+            manifest.unlink(missing_ok=True)
+            return
+        temporary = manifest.with_name(MANIFEST_NAME + ".tmp")
+        temporary.write_text("# the files fretwork wrote here (modified ns, bytes, path): its commands remove only\n"
+                             "# these, as they were written, and the files that say they are fretwork's\n"
+                             + "".join(f"{entries[name]} {name}\n" for name in sorted(entries)), encoding="utf-8")
+        os.replace(temporary, manifest)
+    except OSError:  # the folder went read-only: a later command then refuses to clear, nothing is lost
+        pass
+
+
+def _ours(folder: Path, name: str, recorded: dict[str, str]) -> bool:
+    """Whether the file ``name`` is provably fretwork's: recorded, and unchanged since, or it says so."""
+    path = folder / name
+    return recorded.get(name) == _stamp(path) or _says_fretwork(path)
+
+
+def _files(entry: Path, folder: Path) -> list[str]:
+    """The files at or below ``entry`` (links as files, never followed), relative to ``folder``."""
+    if entry.is_symlink() or not entry.is_dir():
+        return [entry.relative_to(folder).as_posix()]
+    found = []
+    for parent, folders, names in os.walk(entry):
+        base = Path(parent)
+        found += [(base / name).relative_to(folder).as_posix() for name in names]
+        found += [(base / name).relative_to(folder).as_posix() for name in folders if (base / name).is_symlink()]
+    return found
+
+
+def _says_fretwork(path: Path) -> bool:
+    """Whether the file says it was written by fretwork: an HDF5 file whose root attribute
+    ``fretwork_format`` starts with "fretwork-", or a page of ``fretwork report``."""
+    if path.is_symlink() or not path.is_file():
+        return False
+    try:
+        with path.open("rb") as stream:
+            head = stream.read(1024)
+    except OSError:
+        return False
+    if head.startswith(_HDF5_SIGNATURE):
+        import h5py
+
+        try:
+            with h5py.File(path, "r") as file:
+                tag = file.attrs.get("fretwork_format", "")
+        except (OSError, KeyError, ValueError):  # a half-written or damaged file proves nothing
+            return False
+        return (tag.decode(errors="replace") if isinstance(tag, bytes) else str(tag)).startswith("fretwork-")
+    return f"<title>{REPORT_TITLE}".encode() in head
+
+
+def _outputs(folder: Path, outputs: Iterable[str]) -> list[Path]:
+    return sorted({found for pattern in outputs for found in folder.glob(pattern)})
+
+
+def _written(folder: Path, outputs: Iterable[str]) -> set[str]:
+    return {name for entry in _outputs(folder, outputs) for name in _files(entry, folder)}
+
+
+def _refuse_foreign(folder: Path, outputs: Iterable[str], recorded: dict[str, str], option: str) -> None:
+    """InputError naming the files where the command writes that are not provably fretwork's."""
+    foreign = sorted(name for name in _written(folder, outputs) if not _ours(folder, name, recorded))
+    if foreign:
+        shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if len(foreign) > 5 else "")
+        raise InputError(f"{option} {folder} holds files that fretwork did not write, where this command "
+                         f"writes its outputs: {shown}; they are left alone: give another {option}, or move "
+                         "or remove them yourself")
+
+
 def _clear(folder: Path, outputs: Iterable[str], option: str, note: Callable[[str], None]) -> None:
-    old = sorted({found for pattern in outputs for found in folder.glob(pattern)})
+    """Remove the outputs of an earlier run (all fretwork's: :func:`_refuse_foreign` first)."""
+    old = _outputs(folder, outputs)
     for path in old:
         try:
             if path.is_dir() and not path.is_symlink():
@@ -136,16 +268,19 @@ def _clear(folder: Path, outputs: Iterable[str], option: str, note: Callable[[st
 
 
 @contextmanager
-def claim(path, *, outputs: Iterable[str] = (), ready: Callable[[], object] | None = None,
+def claim(path, *, outputs: Iterable[str] = (), clear: bool = True, ready: Callable[[], object] | None = None,
           partial: Iterable[str] = PARTIAL, option: str = "--out",
           note: Callable[[str], None] = _note) -> Iterator[Path]:
     """Check, create, lock and clear the output folder ``path`` for the block (module doc).
 
-    outputs: names or glob patterns of what the command writes there, removed first (pass none
-    to keep everything, e.g. to resume). ready: checks the command's input (raises InputError)
-    before anything is removed. partial: patterns of half-written files, removed when the block
-    is interrupted (Ctrl-C). note: where the one-line note about removed outputs goes.
+    outputs: names or glob patterns of what the command writes there: refused when not
+    fretwork's, removed first when ``clear`` (false: kept, e.g. to resume, or a single file the
+    command writes anew), and recorded in the manifest when the block ends. ready: checks the
+    command's input (raises InputError) before anything is removed. partial: patterns of
+    half-written files, removed when the block is interrupted (Ctrl-C). note: where the
+    one-line note about removed outputs goes.
     """
+    outputs = tuple(outputs)
     folder = check_folder(path, option)
     created = _make(folder, option)
     lock = folder / LOCK_NAME
@@ -154,29 +289,48 @@ def claim(path, *, outputs: Iterable[str] = (), ready: Callable[[], object] | No
     except BaseException:
         _remove_empty(created)
         raise
+    since = lock.stat().st_mtime_ns
     try:
         if ready is not None:
             ready()
-        _clear(folder, outputs, option, note)
-        yield folder
-    except BaseException as error:
-        if isinstance(error, KeyboardInterrupt):
-            _remove_partial(folder, partial)
+        recorded = _recorded(folder)
+        _refuse_foreign(folder, outputs, recorded, option)
+        if clear:
+            _clear(folder, outputs, option, note)
+    except BaseException:
         lock.unlink(missing_ok=True)
         _remove_empty(created)
         raise
-    lock.unlink(missing_ok=True)
+    failed = True
+    try:
+        yield folder
+        failed = False
+    except KeyboardInterrupt:
+        _remove_partial(folder, partial, since)
+        raise
+    finally:
+        # what is below the outputs now is fretwork's: it was (else the claim was refused), or the
+        # command wrote it; what the manifest holds beside (another command's) stays as recorded
+        kept = {name: stamp for name, stamp in recorded.items()
+                if (folder / name).is_file() or (folder / name).is_symlink()}
+        _record(folder, kept | {name: _stamp(folder / name) for name in _written(folder, outputs)})
+        lock.unlink(missing_ok=True)
+        if failed:
+            _remove_empty(created)
 
 
-def _remove_partial(folder: Path, patterns: Iterable[str]) -> None:
-    """Remove the files matching ``patterns`` below ``folder``, then the empty folders below it."""
+def _remove_partial(folder: Path, patterns: Iterable[str], since: int) -> None:
+    """Remove the files matching ``patterns`` below ``folder`` written since ``since`` (ns), then
+    the empty folders below it made or emptied since then: an older file, or an empty folder of
+    the user's, is not the interrupted command's."""
     for pattern in patterns:
         for path in folder.glob(pattern):
-            if path.is_file():
+            if path.is_file() and not path.is_symlink() and path.stat().st_mtime_ns >= since:
                 path.unlink(missing_ok=True)
     for parent, _, _ in sorted(os.walk(folder), key=lambda entry: -len(Path(entry[0]).parts)):
-        if Path(parent) != folder and not any(Path(parent).iterdir()):
-            Path(parent).rmdir()
+        below = Path(parent)
+        if below != folder and not any(below.iterdir()) and below.stat().st_mtime_ns >= since:
+            below.rmdir()
 
 
 def _remove_empty(created: list[Path]) -> None:
@@ -187,4 +341,4 @@ def _remove_empty(created: list[Path]) -> None:
             return
 
 
-__all__ = ["LOCK_NAME", "check_folder", "claim"]
+__all__ = ["LOCK_NAME", "MANIFEST_NAME", "REPORT_TITLE", "check_folder", "claim"]

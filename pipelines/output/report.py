@@ -19,6 +19,7 @@ import h5py
 import numpy as np
 
 from contact.verdict import VERDICT_MEANINGS
+from pipelines.output.locks import REPORT_TITLE
 from reduction.errors import InputError
 
 PACKAGES = ("fretwork", "numpy", "scipy", "scikit-fem", "exudyn", "h5py", "matplotlib", "meshio", "fmpy")
@@ -67,7 +68,8 @@ def _run_section(path: Path, root: Path) -> str:
         name, scene = str(attrs.get("scene_name", "")), str(attrs.get("scene_toml", ""))
         if "summary" not in file:
             return (f"<h2>Run {html.escape(name)} ({html.escape(str(path.relative_to(root)))})</h2>"
-                    "<p class='unsafe'>incomplete results file: no summary</p>")
+                    f"<p class='unsafe'>{html.escape(_no_summary(file))}</p>"
+                    + (f"<details><summary>scene</summary><pre>{html.escape(scene)}</pre></details>" if scene else ""))
         summary = {"verdict": file["summary"].attrs["verdict"], "stationary": bool(file["summary"].attrs["stationary"]),
                    **json.loads(file["summary"].attrs["figures"])}
     verdict = str(summary["verdict"])
@@ -78,6 +80,20 @@ def _run_section(path: Path, root: Path) -> str:
     if scene:
         parts.append(f"<details><summary>scene</summary><pre>{html.escape(scene)}</pre></details>")
     return "\n".join(parts)
+
+
+def _no_summary(file: h5py.File) -> str:
+    """Why a results file has no summary: the run stopped early (its recorded ending, see
+    pipelines.output.results), or it never ended."""
+    from contact.verdict import Ending
+    from pipelines.jobs.run import EARLY_ENDINGS, ENDINGS
+
+    cycles = int(file["cycles/cycle"][-1]) if "cycles/cycle" in file and len(file["cycles/cycle"]) else 0
+    ending = str(file.attrs.get("ending", ""))
+    if ending in {e.value for e in EARLY_ENDINGS}:
+        return (f"the run {ENDINGS[Ending(ending)]} (ending '{ending}') after {cycles} complete cycles: "
+                "the file holds the cycles run so far, without final fields or a verdict")
+    return f"incomplete results file: the run did not end (no ending recorded, {cycles} cycles), no summary"
 
 
 def _job_section(path: Path, root: Path) -> str:
@@ -142,7 +158,7 @@ def write_report(results_dir: str | Path, out_path: str | Path | None = None) ->
     plots = "".join(_image(p, root) for p in images)
     version_rows = [(k, html.escape(v)) for k, v in versions().items()]
     labels = _table([(k, html.escape(v)) for k, v in VERDICT_MEANINGS.items()])
-    page = (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>fretwork report: "
+    page = (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{REPORT_TITLE}"
             f"{html.escape(root.resolve().name)}</title><style>{STYLE}</style></head><body>"
             f"<h1>fretwork report: {html.escape(str(root))}</h1>"
             + "\n".join(s for s in sections if s)

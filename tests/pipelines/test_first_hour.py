@@ -126,16 +126,23 @@ def test_3_a_folder_in_use_and_6_ctrl_c_during_a_limit_search_with_dask_workers(
     assert not [name for name in left if name.endswith((".part", ".tmp", ".lock", "checkpoint.h5"))], left
 
 
-def test_4_a_rerun_clears_the_outputs_of_the_earlier_run(place):
+def test_4_a_rerun_clears_the_outputs_of_the_earlier_run_and_nothing_else(place):
     (place / "mbs.toml").write_text(TINY_MBS)
-    old = place / "o4"
-    old.mkdir()
-    for name in ("run.h5", "wing_order_spectrum.png", "notes.txt"):
-        (old / name).write_text("earlier")
+    done = fretwork("mbs", "mbs.toml", "--out", "o4", "--json", cwd=place)  # the earlier run
+    assert done.returncode == 0 and "note:" not in done.stderr, done.stderr
+    written = ["campbell.png", "run.h5", "wing_spectrum.png", "wing_time_history.png"]
+    assert files(place / "o4") == [".fretwork-outputs", *written]
+    (place / "o4" / "notes.txt").write_text("the user's")
     done = fretwork("mbs", "mbs.toml", "--out", "o4", "--json", cwd=place)
     assert done.returncode == 0, done.stderr
-    assert done.stderr == "fretwork: note: removed 2 output(s) of an earlier run from o4: run.h5, wing_order_spectrum.png\n"
-    assert files(old) == ["campbell.png", "notes.txt", "run.h5", "wing_spectrum.png", "wing_time_history.png"]
+    notes = [line for line in done.stderr.splitlines() if line.startswith("fretwork: note:")]
+    assert notes == [f"fretwork: note: removed 4 output(s) of an earlier run from o4: {', '.join(written)}"]
+    assert files(place / "o4") == [".fretwork-outputs", *sorted(written + ["notes.txt"])]
+    (place / "o4" / "run.h5").write_text("the user's own run.h5")  # not fretwork's: never removed
+    one_error(fretwork("mbs", "mbs.toml", "--out", "o4", cwd=place),
+              "--out o4 holds files that fretwork did not write, where this command writes its outputs: run.h5; "
+              "they are left alone: give another --out, or move or remove them yourself")
+    assert (place / "o4" / "run.h5").read_text() == "the user's own run.h5"
 
 
 def test_5_a_run_that_slides_off_leaves_a_complete_marked_results_file(place):
@@ -146,7 +153,7 @@ def test_5_a_run_that_slides_off_leaves_a_complete_marked_results_file(place):
     line = one_error(fretwork("run", "slide.toml", "--out", "o5", "--quiet", "--no-cache", cwd=place),
                      "tangential equilibrium is lost", code=1)
     assert line.endswith("the results file holds the cycles run so far, marked 'slid_off'")
-    assert files(place / "o5") == ["results.h5"]
+    assert files(place / "o5") == [".fretwork-outputs", "results.h5"]
     with h5py.File(place / "o5" / "results.h5") as results:
         assert results.attrs["complete"] and results.attrs["ending"] == "slid_off"
 
@@ -202,4 +209,4 @@ def test_6_ctrl_c_during_a_run_keeps_its_checkpoint_and_says_how_to_resume(place
     code, stderr = run.ctrl_c()
     assert code == 130, stderr
     assert stderr == "fretwork: interrupted; continue with --resume (from o6/checkpoint.h5)\n"
-    assert files(place / "o6") == ["checkpoint.h5"]
+    assert files(place / "o6") == [".fretwork-outputs", "checkpoint.h5"]

@@ -63,3 +63,28 @@ def test_report_opens_in_a_headless_browser(report, tmp_path):
     decoded = re.search(r'data-decoded="(\d+)"', result.stdout)
     assert decoded, f"the page did not load: {result.stderr[-500:]}"
     assert int(decoded.group(1)) == len(outcome.plots) > 0
+
+
+def test_report_of_a_run_that_stopped_says_how(coarse_cylinder, tmp_path, capsys):
+    """A run that slid off (a tangential force beyond what friction carries) ends with a results
+    file marked 'slid_off', without a summary: the page says the run stopped, and how."""
+    import html
+
+    scene = tmp_path / "slide.toml"
+    scene.write_text(coarse_cylinder.read_text().replace(
+        '[[motions]]\nname = "tangential"\ndof = "cylinder.rp.ux"\nvalue = 0.107',
+        '[[loads]]\nname = "tangential"\ndof = "cylinder.rp.ux"\nvalue = 1000.0'))
+    assert main(["run", str(scene), "--out", str(tmp_path / "out"), "--quiet"]) == 1
+    assert "marked 'slid_off'" in capsys.readouterr().err
+    page = html.unescape(write_report(tmp_path / "out").read_text())
+    assert ("the run stopped: the joint slides off (ending 'slid_off') after 0 complete cycles: the file holds "
+            "the cycles run so far, without final fields or a verdict") in page
+    assert "incomplete" not in page and "[scene]" in page
+
+
+def test_report_names_its_positional_argument(tmp_path, capsys):
+    afile = tmp_path / "afile"
+    afile.write_text("not a folder")
+    assert main(["report", str(afile)]) == 2
+    assert capsys.readouterr().err == (f"fretwork: error: {afile} is not a folder of results (give the --out "
+                                       "folder of a run or a job)\n")

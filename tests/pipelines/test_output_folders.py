@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from pipelines.cli.main import attach_negative_values, main
-from pipelines.output.locks import LOCK_NAME, check_folder, claim
+from pipelines.output.locks import LOCK_NAME, MANIFEST_NAME, check_folder, claim
 from pipelines.scene.checks import plausibility
 from reduction.errors import InputError
 
@@ -49,10 +49,12 @@ def test_the_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
 
 
 def test_outputs_of_an_earlier_run_are_removed_after_the_input_is_checked(tmp_path):
-    (tmp_path / "plots").mkdir()
-    (tmp_path / "plots" / "old.png").write_bytes(b"png")
-    (tmp_path / "results.h5").write_bytes(b"h5")
     (tmp_path / "mine.txt").write_text("the user's")
+    with claim(tmp_path, outputs=("plots", "results.h5")):  # the earlier run
+        (tmp_path / "plots").mkdir()
+        (tmp_path / "plots" / "old.png").write_bytes(b"png")
+        (tmp_path / "results.h5").write_bytes(b"h5")
+    assert _recorded_names(tmp_path) == ["plots/old.png", "results.h5"]
     notes = []
 
     def refuse():
@@ -67,6 +69,148 @@ def test_outputs_of_an_earlier_run_are_removed_after_the_input_is_checked(tmp_pa
     assert notes == [f"removed 2 output(s) of an earlier run from {tmp_path}: plots, results.h5"]
 
 
+def _recorded_names(folder):
+    return [line.split(" ", 2)[2] for line in (folder / MANIFEST_NAME).read_text().splitlines()
+            if not line.startswith("#")]
+
+
+def test_a_recorded_output_the_user_wrote_over_is_not_removed(tmp_path):
+    with claim(tmp_path, outputs=("results.h5",)):
+        (tmp_path / "results.h5").write_bytes(b"fretwork's")
+    (tmp_path / "results.h5").write_bytes(b"the user's own")
+    with pytest.raises(InputError, match="did not write, where this command writes its outputs: results.h5;"), \
+            claim(tmp_path, outputs=("results.h5",)):
+        pass
+    assert (tmp_path / "results.h5").read_bytes() == b"the user's own"
+
+
+def _hdf5(path, **attrs):
+    import h5py
+
+    with h5py.File(path, "w") as file:
+        file.attrs.update(attrs)
+
+
+def test_files_fretwork_did_not_write_are_never_removed(tmp_path):
+    """A user's file in a folder fretwork writes (plots/), an HDF5 file of another program named
+    as fretwork's results: refused, naming them, and nothing is removed."""
+    (tmp_path / "plots").mkdir()
+    (tmp_path / "plots" / "notes.txt").write_text("mine")
+    _hdf5(tmp_path / "results.h5", creator="my own code")
+    with pytest.raises(InputError) as refused, claim(tmp_path, outputs=("plots", "results.h5")):
+        pass
+    assert str(refused.value) == (
+        f"--out {tmp_path} holds files that fretwork did not write, where this command writes its outputs: "
+        "plots/notes.txt, results.h5; they are left alone: give another --out, or move or remove them yourself")
+    assert (tmp_path / "plots" / "notes.txt").read_text() == "mine" and (tmp_path / "results.h5").exists()
+    assert not (tmp_path / LOCK_NAME).exists() and not (tmp_path / MANIFEST_NAME).exists()
+
+
+def test_files_that_say_they_are_fretwork_s_are_removed_without_a_manifest(tmp_path):
+    """A results file whose root attribute says "fretwork-..." and a page of `fretwork report`
+    are fretwork's even when no manifest lists them (a folder of an older fretwork)."""
+    _hdf5(tmp_path / "results.h5", fretwork_format="fretwork-results")
+    (tmp_path / "report.html").write_text("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
+                                          "<title>fretwork report: out</title></head></html>")
+    with claim(tmp_path, outputs=("results.h5", "report.html"), note=lambda _: None):
+        pass
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_command_that_ran_in_the_users_folder(tmp_path, capsys, monkeypatch):
+    """`cd d; fretwork run SCENE --out .` with the user's plots/mine.txt in d: refused, kept."""
+    (tmp_path / "plots").mkdir()
+    (tmp_path / "plots" / "mine.txt").write_text("keep")
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(CYLINDER), "--out", ".", "--quiet"]) == 2
+    assert "plots/mine.txt" in capsys.readouterr().err
+    assert (tmp_path / "plots" / "mine.txt").read_text() == "keep"
+
+
+def test_a_resumed_or_rewritten_output_is_kept_and_recorded(tmp_path):
+    with claim(tmp_path, outputs=("results.h5", "checkpoint.h5")):
+        (tmp_path / "checkpoint.h5").write_bytes(b"state")
+    with claim(tmp_path, outputs=("results.h5", "checkpoint.h5"), clear=False):  # --resume
+        assert (tmp_path / "checkpoint.h5").exists()
+        (tmp_path / "results.h5").write_bytes(b"done")
+    assert _recorded_names(tmp_path) == ["checkpoint.h5", "results.h5"]
+
+
+@pytest.mark.parametrize("out", ["/", "/usr", "/usr/x", "/etc", "/bin", "/lib", "/var", "/boot", "/root", "~",
+                                 "/proc/x", "/sys", "/dev/x"])
+def test_system_folders_are_refused(out):
+    with pytest.raises(InputError, match=rf"^--out {out}: \S+ (is a system folder|holds other folders)"):
+        check_folder(out)
+
+
+def test_an_empty_out_is_refused(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(CYLINDER), "--out", "", "--quiet"]) == 2
+    assert capsys.readouterr().err == ("fretwork: error: --out is empty: give a folder for the results (it is "
+                                       "created if missing), e.g. --out results\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_refused_mode_count_keeps_the_earlier_plot(tmp_path, capsys):
+    """`fretwork reduce` writes its one plot anew: a mode count the mesh refuses loses nothing."""
+    mesh = EXAMPLES / "user_joint" / "cw.inp"
+    out = tmp_path / "o"
+    assert main(["reduce", str(mesh), "--modes", "4", "--out", str(out)]) == 0
+    plot = (out / "reduction_error_vs_modes.png").read_bytes()
+    for modes in ("-3", "100000"):
+        assert main(["reduce", str(mesh), "--modes", modes, "--out", str(out)]) == 2
+        assert (out / "reduction_error_vs_modes.png").read_bytes() == plot
+    err = capsys.readouterr().err
+    assert "removed" not in err and "normal modes" in err
+
+
+@pytest.mark.parametrize("sizes, message", [
+    ("0.2,10", "--sizes: 10 mm does not suit body 'cylinder'"),
+    ("10,10", "--sizes '10,10': needs at least two different positive element sizes (mm)"),
+    ("0.2,-1", "needs at least two different positive element sizes")])
+def test_refused_sizes_keep_the_earlier_study(tmp_path, capsys, sizes, message):
+    out = tmp_path / "study"
+    with claim(out, outputs=("size_*mm", "convergence.png")):  # an earlier study's outputs
+        (out / "size_1mm").mkdir()
+        (out / "size_1mm" / "results.h5").write_bytes(b"h5")
+        (out / "convergence.png").write_bytes(b"png")
+    capsys.readouterr()
+    assert main(["study", "convergence", str(CYLINDER), "--sizes", sizes, "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "removed" not in err
+    assert (out / "size_1mm" / "results.h5").exists() and (out / "convergence.png").exists()
+
+
+def test_the_stopped_hint_offers_resume_only_from_a_checkpoint(tmp_path):
+    from types import SimpleNamespace
+
+    from contact.solver import ConvergenceError
+    from pipelines.cli.main import _stopped_hint
+
+    error = ConvergenceError("Newton did not converge")
+    run = SimpleNamespace(command="run", out=str(tmp_path))
+    assert _stopped_hint(run, error) == (f"; partial results stay in {tmp_path}: after changing the scene, "
+                                         "run again")
+    (tmp_path / "checkpoint.h5").write_bytes(b"state")
+    assert _stopped_hint(run, error).endswith("run again (or --resume from its last checkpoint)")
+    assert "--resume" not in _stopped_hint(SimpleNamespace(command="limit", out=str(tmp_path)), error)
+
+
+def test_a_run_that_stops_before_its_first_checkpoint_does_not_offer_resume(coarse_cylinder, tmp_path, capsys):
+    pull = tmp_path / "pull.toml"  # pulled off the plane under force control in the preload
+    pull.write_text(coarse_cylinder.read_text().replace("value = -1066.0", "value = 1066.0"))
+    assert main(["run", str(pull), "--out", str(tmp_path / "out"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "partial results stay in" in err and "--resume" not in err
+
+
+def test_area_fractions_that_sum_to_one_in_rounding_are_not_above_100_percent():
+    from pipelines.cli.main import _widened
+
+    assert _widened(1.0000000000000002, None) == ""  # stick + slip of a run where nothing opened
+    assert _widened(1.001).startswith(" (above 100 %")
+
+
 def test_a_refused_command_leaves_no_folder_behind(tmp_path):
     with pytest.raises(InputError), claim(tmp_path / "a" / "b"):
         raise InputError("bad scene")
@@ -74,13 +218,19 @@ def test_a_refused_command_leaves_no_folder_behind(tmp_path):
 
 
 def test_an_interrupted_command_leaves_no_half_written_files(tmp_path):
+    (tmp_path / "mine").mkdir()  # the user's, older than the command: kept
+    (tmp_path / "download.part").write_bytes(b"the user's")
+    old = (tmp_path / "download.part").stat().st_mtime_ns - 10**9
+    for path in (tmp_path / "download.part", tmp_path / "mine"):
+        os.utime(path, ns=(old, old))
     with pytest.raises(KeyboardInterrupt), claim(tmp_path) as folder:
         (folder / "runs" / "a").mkdir(parents=True)
         (folder / "runs" / "a" / "results.h5.part").write_bytes(b"part")
         (folder / "runs" / "b").mkdir()
         (folder / "runs" / "b" / "results.h5").write_bytes(b"whole")
         raise KeyboardInterrupt
-    assert sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*")) == ["runs", "runs/b", "runs/b/results.h5"]
+    assert sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*")) == [
+        "download.part", "mine", "runs", "runs/b", "runs/b/results.h5"]
 
 
 @pytest.mark.parametrize("command", [
