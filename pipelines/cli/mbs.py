@@ -18,12 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mbs.histories import unsettled_message
+from mbs.histories import SETTLED_CHANGE, unsettled_message
 from mbs.model import SimulationError
 from mbs.parameters import ModelParams
 from mbs.plots import plot_campbell, plot_sweep
 from mbs.run import run_model
-from pipelines.jobs.sweep import parse_speeds, speed_sweep, sweep_paths
+from pipelines.jobs.sweep import check_resolution, parse_speeds, speed_sweep, sweep_paths
 from pipelines.parallel import add_cluster_arguments
 from reduction.errors import InputError
 
@@ -101,6 +101,8 @@ def run_sweep(args) -> int:
     try:
         params = model_params(args.scene)
         speeds = parse_speeds(args.speeds)
+        for message in check_resolution(params, speeds):
+            print(f"fretwork: warning: {message}", file=sys.stderr)
         result = speed_sweep(params, speeds, path=path, progress=True, scheduler=args.scheduler,
                              workers=args.workers)
     except InputError as error:
@@ -145,9 +147,12 @@ def run_single(args) -> int:
     try:
         params = model_params(args.scene)
         counterweight = _counterweight(args, params)
+        resolution_warnings = check_resolution(params, [params.speed_rpm])
     except InputError as error:
         print(f"fretwork: error: {error}", file=sys.stderr)
         return 2
+    for message in resolution_warnings:
+        print(f"fretwork: warning: {message}", file=sys.stderr)
     try:
         outputs = run_model(params, args.out)
     except SimulationError as error:
@@ -175,12 +180,35 @@ def run_single(args) -> int:
     if interface is not None:
         summary["interface_histories"] = interface
         summary["counterweight"] = counterweight
-    if args.json:
-        print(json.dumps(summary, indent=2))
-    else:
-        for key, value in summary.items():
-            print(f"{key}: {value}")
+    print(json.dumps(summary, indent=2) if args.json else describe_run(summary, params))
     message = unsettled_message(histories.unsettled_change, params.solver.revolutions, params.speed_rpm)
     if message is not None:
         print(f"fretwork: warning: {message}", file=sys.stderr)
     return 0
+
+
+def describe_run(summary: dict, params: ModelParams) -> str:
+    """The summary of `fretwork mbs` for a reader: wing amplitudes in µm, frequencies in Hz, the
+    run's length and step, its files (the --json summary holds the same values unrounded)."""
+    amplitudes = ", ".join(f"CW{k + 1} {_micrometres(a)}" for k, a in enumerate(summary["wing_amplitude_mm"]))
+    change = summary["unsettled_change"]
+    steadiness = ("too short to tell whether it is steady" if change is None else
+                  f"{'steady' if change <= SETTLED_CHANGE else 'NOT STEADY'}, the wing amplitude changes by "
+                  f"{100 * change:.1f} % between its first and last engine cycle (at most "
+                  f"{100 * SETTLED_CHANGE:.0f} %)")
+    lines = [f"multibody run at {summary['speed_rpm']:g} rpm: {params.solver.revolutions:g} revolutions, time step "
+             f"{summary['time_step_s']:g} s, {summary['cb_modes']} Craig-Bampton modes per CW",
+             f"  wing amplitude (half peak-to-peak over the second half of the run): {amplitudes}",
+             f"  second half: {steadiness}",
+             f"  CW torsion mode: {summary['torsion_mode_hz']:.1f} Hz",
+             f"  run time: {summary['real_time_factor']:.3g} simulated s per wall-clock s",
+             f"  results: {summary['file']}",
+             f"  plots: {', '.join(summary['plots'].values())}"]
+    if "interface_histories" in summary:
+        lines.append(f"  interface histories of CW{summary['counterweight']}: {summary['interface_histories']}")
+    return "\n".join(lines)
+
+
+def _micrometres(amplitude_mm: float) -> str:
+    """A wing amplitude (mm) in µm, three significant digits (the shipped CW's are below 1 µm)."""
+    return f"{1e3 * amplitude_mm:.3g} µm"

@@ -9,11 +9,12 @@ tests/bench/test_bench_distributed.py). Units: rpm, Hz, mm.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
+from mbs.excitation import excitation_orders
 from mbs.model import reduce_bodies
 from mbs.parameters import ModelParams
 from mbs.sweep import SweepResult, collect_sweep, run_speed, write_sweep
@@ -46,6 +47,78 @@ def parse_speeds(text: str) -> np.ndarray:
                          "or a comma-separated list (rpm)") from None
 
 
+#: Time steps per period of the highest excitation order. Below SAMPLED_STEPS (Nyquist) the
+#: excitation is not represented at all, and exudyn may cut its steps to converge, leaving the
+#: histories without the fixed sample rate their spectra need (75000 rpm at 5e-5 s: 0.5 steps per
+#: gear-mesh period). Below ACCURATE_STEPS the period error of a second-order integrator,
+#: about (2π/n)²/12, exceeds 3 %.
+SAMPLED_STEPS = 2.0
+ACCURATE_STEPS = 10.0
+
+
+@dataclass(frozen=True)
+class Resolution:
+    """How the multibody time step samples the highest excitation order at one speed."""
+
+    speed_rpm: float
+    order: float
+    source: str  # "gear mesh" or "gas torque"
+    frequency_hz: float
+    steps_per_period: float
+    time_step_s: float
+
+    def advice(self) -> str:
+        """The way out: a time step that resolves the order at this speed, or a lower speed."""
+        needed = 1.0 / (ACCURATE_STEPS * self.frequency_hz)
+        highest = 60.0 / (ACCURATE_STEPS * self.order * self.time_step_s)
+        return (f"set [mbs.solver] time_step to at most {needed:.2g} s ({ACCURATE_STEPS:g} steps per period), or "
+                f"keep to speeds up to {highest:.0f} rpm at {self.time_step_s:g} s")
+
+
+def excitation_resolution(model_params: ModelParams, speeds) -> list[Resolution]:
+    """The resolution of the highest excitation order at every speed (rpm); [] without excitation."""
+    orders = excitation_orders(model_params.excitation, model_params.effects)
+    if orders.size == 0:
+        return []
+    order = float(orders.max())
+    gear = "gear_mesh" in model_params.effects and order == float(model_params.excitation.gear_teeth)
+    step = model_params.solver.time_step
+    found = []
+    for speed in np.asarray(speeds, dtype=float):
+        frequency = order * speed / 60.0
+        found.append(Resolution(float(speed), order, "gear mesh" if gear else "gas torque", frequency,
+                                1.0 / (frequency * step), step))
+    return found
+
+
+def check_resolution(model_params: ModelParams, speeds) -> list[str]:
+    """Refuse (InputError) the speeds whose highest excitation order the time step does not
+    sample (:data:`SAMPLED_STEPS`), before any run; return a warning for those it samples with
+    fewer than :data:`ACCURATE_STEPS` steps per period."""
+    resolutions = excitation_resolution(model_params, speeds)
+    unsampled = [r for r in resolutions if r.steps_per_period < SAMPLED_STEPS]
+    coarse = [r for r in resolutions if SAMPLED_STEPS <= r.steps_per_period < ACCURATE_STEPS]
+    if unsampled:
+        worst = max(unsampled, key=lambda r: r.speed_rpm)
+        raise InputError(f"at {_speeds(unsampled)} rpm the multibody time step {worst.time_step_s:g} s cannot "
+                         f"follow the {worst.source} (engine order {worst.order:g}): at {worst.speed_rpm:g} rpm it "
+                         f"is {worst.frequency_hz:.0f} Hz, {worst.steps_per_period:.2g} steps per period, fewer "
+                         f"than the {SAMPLED_STEPS:g} that sample it at all: {worst.advice()} "
+                         f"(is {worst.speed_rpm:g} rpm the engine speed you meant?)")
+    if not coarse:
+        return []
+    worst = max(coarse, key=lambda r: r.speed_rpm)
+    return [f"at {_speeds(coarse)} rpm the multibody time step {worst.time_step_s:g} s follows the {worst.source} "
+            f"(engine order {worst.order:g}) with fewer than {ACCURATE_STEPS:g} steps per period "
+            f"({worst.steps_per_period:.2g} at {worst.speed_rpm:g} rpm, {worst.frequency_hz:.0f} Hz): its response "
+            f"there is not accurate; {worst.advice()}"]
+
+
+def _speeds(resolutions) -> str:
+    speeds = [f"{r.speed_rpm:g}" for r in resolutions]
+    return speeds[0] if len(speeds) == 1 else ", ".join(speeds[:-1]) + " and " + speeds[-1]
+
+
 def speed_sweep(model_params: ModelParams, speeds, *, path=None, progress: bool = False,
                 scheduler: str | None = None, workers: int | None = None) -> SweepResult:
     """Run model_params at every engine speed in ``speeds`` (rpm) and collect the sweep.
@@ -54,11 +127,14 @@ def speed_sweep(model_params: ModelParams, speeds, *, path=None, progress: bool 
     here, by the client. progress: a bar over the finished speeds on stderr.
     scheduler, workers: where the speeds run (:func:`pipelines.parallel.map_cases`): None, None is
     an embedded local cluster with one worker per core; workers=0 runs them in this process.
+    Speeds whose excitation the time step does not sample are refused before any run
+    (:func:`check_resolution`; its warnings are the caller's to say).
     """
     speeds = np.asarray(speeds, dtype=float)
     if speeds.ndim != 1 or speeds.size == 0 or np.any(speeds <= 0):
         raise InputError("sweep speeds must be a non-empty list of positive engine speeds (rpm)")
     model_params.validate()
+    check_resolution(model_params, speeds)
     reduced, reduced_throw = reduce_bodies(model_params)
     cases = [(float(speed), {"params": replace(model_params, speed_rpm=float(speed))}) for speed in speeds]
     outcomes = map_cases(run_speed, cases, scheduler=scheduler, workers=workers, label="sweep", progress=progress,

@@ -13,7 +13,7 @@ import mbs.sweep as sweep_module
 from pipelines.cli.mbs import add_sweep_parser
 from mbs.model import SimulationError
 from mbs.parameters import CrankThrowParams, ModelParams, SolverParams
-from pipelines.jobs.sweep import parse_speeds, speed_sweep
+from pipelines.jobs.sweep import check_resolution, parse_speeds, speed_sweep
 from reduction.errors import InputError
 
 
@@ -118,3 +118,59 @@ def test_cli_single_run_writes_histories_and_reports_json(tmp_path, capsys):
     assert summary["speed_rpm"] == 600 and summary["cb_modes"] == 2
     with h5py.File(summary["file"]) as root:
         assert "cw1_wing_torsion" in root["histories"]
+
+
+def test_a_speed_whose_excitation_the_time_step_cannot_sample_is_refused_before_any_run(tmp_path, monkeypatch,
+                                                                                       capsys):
+    """75000 rpm (750 meant) at 5e-5 s: 0.5 steps per gear-mesh period; exudyn cut its steps and the
+    spectra refused the histories ("signal time step is not uniform"), naming neither cause nor speed."""
+    import pipelines.jobs.sweep as jobs_sweep
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the sweep went on to reduce the bodies")
+
+    monkeypatch.setattr(jobs_sweep, "reduce_bodies", refuse)
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[mbs]\nn_modes = 2\neffects = ["gear_mesh"]\n[mbs.solver]\nrevolutions = 0.5\ntime_step = 5e-5\n')
+    parser = argparse.ArgumentParser()
+    add_sweep_parser(parser.add_subparsers())
+    args = parser.parse_args(["sweep", str(scene), "--speeds", "750,75000", "--out", str(tmp_path / "out")])
+    assert args.handler(args) == 2
+    error = capsys.readouterr().err
+    assert error.startswith("fretwork: error: at 75000 rpm the multibody time step 5e-05 s cannot follow the gear "
+                            "mesh (engine order 48): at 75000 rpm it is 60000 Hz, 0.33 steps per period")
+    assert "set [mbs.solver] time_step to at most 1.7e-06 s" in error and "speeds up to 2500 rpm" in error
+
+
+def test_a_time_step_that_samples_the_excitation_coarsely_is_warned_about():
+    params = ModelParams(n_modes=2, effects=frozenset({"gear_mesh"}), solver=SolverParams(time_step=1e-4))
+    assert check_resolution(params, [700.0, 750.0]) == []  # 48 x 12.5 Hz = 600 Hz: 17 steps per period
+    warning, = check_resolution(params, [700.0, 2000.0, 3000.0])
+    assert warning.startswith("at 2000 and 3000 rpm the multibody time step 0.0001 s follows the gear mesh (engine "
+                              "order 48) with fewer than 10 steps per period (4.2 at 3000 rpm, 2400 Hz)")
+    gas = ModelParams(n_modes=2, effects=frozenset({"gas_torque"}), solver=SolverParams(time_step=1e-4))
+    assert "gas torque" in check_resolution(gas, [40000.0])[0]
+    assert check_resolution(replace(params, effects=frozenset()), [75000.0]) == []  # nothing excites the model
+
+
+def test_cli_single_run_reads_as_a_summary_with_units(tmp_path, capsys):
+    from pipelines.cli.mbs import add_run_parser
+
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[mbs]\nspeed_rpm = 600\nn_modes = 2\n[mbs.solver]\nrevolutions = 1.0\ntime_step = 1e-4\n')
+    parser = argparse.ArgumentParser()
+    add_run_parser(parser.add_subparsers())
+    as_json = parser.parse_args(["mbs", str(scene), "--out", str(tmp_path / "run"), "--json"])
+    assert as_json.handler(as_json) == 0
+    summary = json.loads(capsys.readouterr().out)
+    args = parser.parse_args(["mbs", str(scene), "--out", str(tmp_path / "run")])
+    assert args.handler(args) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "multibody run at 600 rpm: 1 revolutions, time step 0.0001 s, 2 Craig-Bampton modes per CW"
+    amplitudes = [1e3 * a for a in summary["wing_amplitude_mm"]]
+    assert lines[1] == ("  wing amplitude (half peak-to-peak over the second half of the run): "
+                        f"CW1 {amplitudes[0]:.3g} µm, CW2 {amplitudes[1]:.3g} µm")
+    assert lines[2] == "  second half: too short to tell whether it is steady"
+    assert lines[3] == f"  CW torsion mode: {summary['torsion_mode_hz']:.1f} Hz"
+    assert lines[5] == f"  results: {summary['file']}"
+    assert not any("{" in line or "e-0" in line for line in lines)  # no raw dict, no unrounded floats
