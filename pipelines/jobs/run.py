@@ -58,8 +58,8 @@ class ProgressBar:
         # what slid in the cycle, and what sits at the friction limit (it need not move: in
         # normal operation a third of the pads sits at the limit of μ₀ and sticks), of the area
         figures = summary.figures
-        shown = {"sliding": f"{figures['active_slip_area_fraction']:.2f}",
-                 "at_limit": f"{figures['slip_area_fraction']:.2f}"}
+        shown = {"sliding": f"{100 * figures['active_slip_area_fraction']:.0f}%",
+                 "at_limit": f"{100 * figures['slip_area_fraction']:.0f}%"}
         if summary.clamp_force is not None:
             shown["clamp"] = f"{1e-3 * summary.clamp_force:.1f}kN"
         self.bar.set_postfix(shown, refresh=False)
@@ -123,9 +123,16 @@ def _linear_solver(solver):
     return solver.solver.linear if isinstance(solver, SlidingSolver) else solver.linear
 
 
+def _say(progress: bool, label: str, stage: str) -> None:
+    """One line on stderr as a set-up stage starts (before the progress bar exists), if progress is shown."""
+    if progress:
+        print(f"{label}: {stage} ...", file=sys.stderr, flush=True)
+
+
 def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool = True,
               resume: bool = False) -> Outcome:
     stage_times = {}
+    _say(progress, model.scene.name, f"the contact operators ({contact_solver(model)} path)")
     clock = time.perf_counter()
     space = model.contact_space()
     solver = _solver(model, space)
@@ -224,9 +231,11 @@ def run_scene(scene: Scene, out_dir: str | Path, *, progress: bool = True, plots
     if "coupling" in scene.data:
         from pipelines.coupling import multibody_loading
 
+        _say(progress, scene.name, "the multibody run (or its cached result)")
         clock = time.perf_counter()
         multibody = multibody_loading(scene, cache)
         times["multibody_s"] = time.perf_counter() - clock
+    _say(progress, scene.name, "meshing, condensing the bodies and pairing the contact")
     clock = time.perf_counter()
     model = build(scene, cache=cache, multibody=multibody)
     times["build_and_condense_s"] = time.perf_counter() - clock
