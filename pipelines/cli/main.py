@@ -158,7 +158,8 @@ def cmd_demo(args) -> int:
 
 
 def cmd_limit(args) -> int:
-    from pipelines.jobs.limit import coupled_scene, describe_limit, find_limit, parse_range_um, plot_limit, write_limit
+    from pipelines.jobs.limit import (coupled_scene, describe_limit, find_limit, format_um, parse_range_um, plot_limit,
+                                      write_limit)
 
     low, high = parse_range_um(args.amplitude)
     if args.tolerance <= 0:
@@ -174,7 +175,8 @@ def cmd_limit(args) -> int:
         print(_json(summary))
     else:
         for run in summary["runs"]:
-            print(f"  {run['amplitude_um']:8.1f} µm: {run['verdict'] or 'FAILED ' + str(run['error'])}"
+            print(f"  {format_um(1e-3 * run['amplitude_um'], result.tolerance_mm):>8} µm: "
+                  f"{run['verdict'] or 'FAILED ' + str(run['error'])}"
                   + (f", clamp-force loss {100 * run['clamp_force_loss_fraction']:.2f} %, damaged area "
                      f"{100 * (run['damaged_area_fraction'] or 0.0):.1f} %{_widened(run['damaged_area_fraction'])}"
                      if run.get("clamp_force_loss_fraction") is not None else "")
@@ -182,8 +184,8 @@ def cmd_limit(args) -> int:
         print(f"{name}: {describe_limit(result)} (tolerance {args.tolerance:g} µm)")
         if not result.monotone:
             for change in result.changes:
-                print(f"  {change.verdict_below} at {1e3 * change.below_mm:.1f} µm -> {change.verdict_above} "
-                      f"at {1e3 * change.above_mm:.1f} µm")
+                print(f"  {change.verdict_below} at {format_um(change.below_mm, result.tolerance_mm)} µm -> "
+                      f"{change.verdict_above} at {format_um(change.above_mm, result.tolerance_mm)} µm")
         print(f"  plot: {plot}")
     return 0
 
@@ -216,7 +218,8 @@ def cmd_sweep(args) -> int:
             print(f"{speed:8.1f} {1e3 * amplitude:9.1f} {margin:8.2f}{flags[result.state(k)]}")
         limit = "above the searched range" if summary["limit_um"] is None else f"{summary['limit_um']:.1f} µm"
         print(f"amplitude limit {limit} (searched at {result.limit_speed_rpm:.0f} rpm); "
-              f"calibration factor {result.calibration:.4g}")
+              f"calibration factor {result.calibration:.4g} (the scene's stated wing amplitude / the multibody "
+              f"wing amplitude at its own speed: every speed's multibody amplitude is multiplied by it)")
         print(describe_margins(result))
         print(f"results: {out}, plot: {plot}")
     return 0
@@ -255,7 +258,8 @@ def cmd_study(args) -> int:
         print(_json(records))
     else:
         for r in records:
-            print(f"{r['model']:<20} {r['probe']} at {np.round(r['position_mm'], 2)} mm: "
+            print(f"{r['model']:<20} {r['probe']} at {np.round(r['position_mm'], 2)} mm "
+                  f"({r['distance_mm']:.2g} mm from the probe): "
                   f"max shear {r['max_shear_MPa']:.2f} MPa (slip area {r['slip_area_fraction']:.0%})")
     return 0
 
@@ -538,8 +542,10 @@ def _check_input(args) -> None:
     from pipelines.scene.checks import plausibility
 
     if isinstance(getattr(args, "amplitude", None), str):
-        from pipelines.jobs.limit import parse_range_um
-        parse_range_um(args.amplitude)
+        from pipelines.jobs.limit import check_search, parse_range_um
+        low, high = parse_range_um(args.amplitude)
+        if isinstance(getattr(args, "tolerance", None), (int, float)):
+            check_search(low, high, 1e-3 * args.tolerance, getattr(args, "grid", 7))
     if isinstance(getattr(args, "speeds", None), str):
         from pipelines.jobs.sweep import parse_speeds
         parse_speeds(args.speeds)

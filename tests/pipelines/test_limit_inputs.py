@@ -57,3 +57,19 @@ def test_amplitudes_are_printed_to_the_tolerance():
     assert limits.format_um(0.26374, 0.00005) == "263.74"  # a 0.05 µm tolerance: its two decimals
     assert limits.format_um(0.0004) == "0.40"
     assert limits.format_um(0.000004) == "0.0040"
+
+
+def test_a_too_wide_tolerance_is_refused_before_earlier_outputs_are_cleared(tmp_path, monkeypatch, capsys):
+    """The CLI checks the search (range, tolerance, grid) with the other inputs, before it touches
+    the output folder: an earlier limit's outputs stay."""
+    monkeypatch.setattr(limits, "run_amplitude", _no_run)
+    out = tmp_path / "o"
+    out.mkdir()
+    earlier = out / "limit.json"
+    earlier.write_text("{}")
+    status = earlier.lstat()  # recorded as an earlier limit's output, which a run would remove
+    (out / ".fretwork-outputs").write_text(f"{status.st_mtime_ns} {status.st_size} limit.json\n")
+    assert main(["limit", str(SCENE), "--amplitude", "100:105", "--tolerance", "10", "--workers", "0",
+                 "--cache", str(tmp_path), "--out", str(out)]) == 2
+    assert "not narrower than the amplitude range" in capsys.readouterr().err
+    assert earlier.read_text() == "{}"
