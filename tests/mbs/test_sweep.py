@@ -105,13 +105,19 @@ def test_default_model_resonates_where_the_gear_order_crosses_the_coupled_torsio
     assert abs(result.peak_speed() - nearest["speed_rpm"]) <= step
 
 
-def test_cli_single_run_writes_histories_and_reports_json(tmp_path, capsys):
+def _mbs_parser(tmp_path):
+    """(parser of `fretwork mbs`, a small scene file: 600 rpm, 2 modes, one revolution)."""
     from pipelines.cli.mbs import add_run_parser
 
     scene = tmp_path / "scene.toml"
     scene.write_text('[mbs]\nspeed_rpm = 600\nn_modes = 2\n[mbs.solver]\nrevolutions = 1.0\ntime_step = 1e-4\n')
     parser = argparse.ArgumentParser()
     add_run_parser(parser.add_subparsers())
+    return parser, scene
+
+
+def test_cli_single_run_writes_histories_and_reports_json(tmp_path, capsys):
+    parser, scene = _mbs_parser(tmp_path)
     args = parser.parse_args(["mbs", str(scene), "--out", str(tmp_path / "run"), "--json"])
     assert args.handler(args) == 0
     summary = json.loads(capsys.readouterr().out)
@@ -154,12 +160,7 @@ def test_a_time_step_that_samples_the_excitation_coarsely_is_warned_about():
 
 
 def test_cli_single_run_reads_as_a_summary_with_units(tmp_path, capsys):
-    from pipelines.cli.mbs import add_run_parser
-
-    scene = tmp_path / "scene.toml"
-    scene.write_text('[mbs]\nspeed_rpm = 600\nn_modes = 2\n[mbs.solver]\nrevolutions = 1.0\ntime_step = 1e-4\n')
-    parser = argparse.ArgumentParser()
-    add_run_parser(parser.add_subparsers())
+    parser, scene = _mbs_parser(tmp_path)
     as_json = parser.parse_args(["mbs", str(scene), "--out", str(tmp_path / "run"), "--json"])
     assert as_json.handler(as_json) == 0
     summary = json.loads(capsys.readouterr().out)
