@@ -187,10 +187,11 @@ def test_the_study_command_passes_on_stop_at_loosening(coarse_cylinder, tmp_path
     monkeypatch.setattr(convergence, "convergence_study", study)
     monkeypatch.setattr(convergence, "plot_convergence", lambda study, path: path)
     monkeypatch.setattr(convergence, "plot_histories", lambda study, path: None)
-    assert main(["study", "convergence", str(coarse_cylinder), "--sizes", "10,5", "--stop-at-loosening",
+    # sizes the cylinder's meshes take (contact zone 2 mm wide): the CLI checks them before the study
+    assert main(["study", "convergence", str(coarse_cylinder), "--sizes", "0.4,0.2", "--stop-at-loosening",
                  "--out", str(tmp_path)]) == 0
     assert asked["stop_at_loosening"] is True
-    assert "5 mm: loosening evident after 1.5e+06 real cycles (the run stopped there)" in capsys.readouterr().out
+    assert "0.2 mm: loosening evident after 1.5e+06 real cycles (the run stopped there)" in capsys.readouterr().out
 
 
 def test_a_size_the_meshes_refuse_is_said_before_any_level_runs(tmp_path, capsys):
