@@ -90,8 +90,18 @@ class Coupled:
 
 def multibody_params(scene: Scene):
     """mbs.ModelParams of a coupled scene: its [mbs] table with the scene's multibody effects.
-    A CW body read from a mesh file is the multibody CW too (:func:`_file_counterweight`)."""
+    A CW body read from a mesh file is the multibody CW too (:func:`_file_counterweight`).
+    A scene whose loads come from an interface-histories file is refused: the file, not the
+    [mbs] model, drives it, at the one speed it was recorded at, so a multibody run, sweep or
+    margin of the [mbs] table would judge another joint (its excitation switched off)."""
     from mbs.scene import model_params_from_mapping
+
+    if scene.data.get("coupling", {}).get("histories") is not None:
+        raise InputError(f"the scene's loads come from the interface-histories file "
+                         f"'{scene.data['coupling']['histories']}' ([coupling] histories), recorded at one "
+                         "speed: its [mbs] model does not drive them, so it cannot give a multibody run, a "
+                         "speed sweep or margins; run those on the scene of the multibody model the file came "
+                         "from (or on your own multibody code), and this scene for the contact at that speed")
 
     table = dict(scene.section("mbs"))
     table["effects"] = sorted(set(scene.effects) & set(MULTIBODY_EFFECTS))
