@@ -488,8 +488,10 @@ def _bordered(W_cc, closed_blocks, E_c, Sq, dtype) -> tuple[np.ndarray, np.ndarr
                   rows.astype(dtype, copy=False).reshape(-1, dim, n_c),
                   out=transposed[:n_c, :n_c].reshape(-1, dim, n_c))
         transposed[np.diag_indices(n_c)] += 1.0
-    # Eᵀ·blockdiag(D) = (blockdiag(Dᵀ)·E)ᵀ
-    tangent_E = np.einsum("pji,pjm->pim", closed_blocks, E_c.reshape(-1, dim, m)).reshape(n_c, m)
+    # Eᵀ·blockdiag(D) = (blockdiag(Dᵀ)·E)ᵀ; the points' count is given, not inferred (-1):
+    # with no control DOFs (every reference-point DOF prescribed) E_c is empty
+    points = closed_blocks.shape[0]
+    tangent_E = np.einsum("pji,pjm->pim", closed_blocks, E_c.reshape(points, dim, m)).reshape(n_c, m)
     stiffness = np.abs(np.einsum("rm,rm->m", E_c, tangent_E)) + np.abs(np.diag(Sq))
     floor = 1e-3 * stiffness.max(initial=0.0)
     scale = 1.0 / (np.maximum(stiffness, floor) if floor > 0.0 else np.ones(m))

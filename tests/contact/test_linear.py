@@ -62,6 +62,43 @@ def test_newton_correction_equals_the_dense_solve(flat, direct_below, opened):
     assert np.max(np.abs(got - expected)) <= 1e-8 * scale
 
 
+def held_punch_space(keep_interior=False):
+    """The flat-on-flat case with every reference-point DOF prescribed (pressed and slid by
+    motions, no load) on matching faces, so no surface node is left unpaired: no control DOF
+    at all (as after a finite-sliding re-pairing, which eliminates every surface DOF)."""
+    case = flat_on_flat(6, layers=3)
+    motions = {"normal": [("punch", "rp", "uz", -1.0)],
+               "tangential": [("punch", "rp", "ux", 1.0), ("punch", "rp", "uy", 0.5)]}
+    structure = assemble(case.bodies, case.slave, case.master, loads={}, motions=motions,
+                         keep_interior=keep_interior).structure
+    return case, structure
+
+
+@pytest.fixture(scope="module")
+def held():
+    case, structure = held_punch_space()
+    space = ContactSpace(structure)
+    assert space.n_control == 0
+    return case, space
+
+
+@pytest.mark.parametrize("direct_below", [np.inf, 0])
+@pytest.mark.parametrize("opened", [0, 7])
+def test_newton_correction_without_control_dofs_equals_the_dense_solve(held, direct_below, opened):
+    """No control DOF: the bordered system is the closed block alone, on the exact and the
+    Krylov paths (the border was once reshaped to (points, dim, 0) by inference, which
+    numpy refuses), and the correction is the plain dense solve's."""
+    case, space = held
+    blocks = _tangent(case, space, opened)
+    r_kin = np.random.default_rng(2).normal(0.0, 1e-4, space.n_rows)
+    expected = np.linalg.solve(_full_system(space, blocks), -r_kin)
+    solver = NewtonLinearSolver(space, KrylovSettings(direct_below=direct_below, relative_tolerance=1e-12,
+                                                      single_precision=False))
+    delta_g, delta_q = solver.solve(blocks, r_kin, np.zeros(0))
+    assert delta_q.shape == (0,)
+    assert np.max(np.abs(delta_g - expected)) <= 1e-8 * np.max(np.abs(expected))
+
+
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 def test_compliance_on_closed_rows_is_w_gathered_and_rounded(flat, dtype):
     """W on the working rows of a partly open interface is W's entries there (rounded to the

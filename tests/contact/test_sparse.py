@@ -21,7 +21,7 @@ from contact.sparse import (
 from contact.structure import ContactSpace
 from reduction.errors import InputError
 from tests.bench.bench_report import flat_on_flat
-from tests.contact.test_linear import _full_system, _tangent
+from tests.contact.test_linear import _full_system, _tangent, held_punch_space
 
 pytest.importorskip("pypardiso")
 
@@ -101,6 +101,20 @@ def test_newton_correction_equals_the_dense_solve(spaces, opened, reference):
     got = np.concatenate(solver.solve(other, r_kin, r_ctl))
     assert _relative(got, expected) < 1e-9
     assert solver.counters.factorisations == 1 and solver.counters.krylov_iterations > 2
+
+
+def test_newton_correction_without_control_dofs_equals_the_dense_solve():
+    """Every reference-point DOF prescribed: no control DOF on the sparse path either, and
+    the correction is the plain dense solve's."""
+    case, whole = held_punch_space(keep_interior=True)
+    sparse, dense = SparseContactSpace(whole), ContactSpace(held_punch_space()[1])
+    assert sparse.n_control == dense.n_control == 0
+    blocks = _tangent(case, dense, 7)
+    r_kin = np.random.default_rng(2).normal(0.0, 1e-4, dense.n_rows)
+    expected = np.linalg.solve(_full_system(dense, blocks), -r_kin)
+    delta_g, delta_q = SparseNewtonSolver(sparse, KrylovSettings(relative_tolerance=1e-12)).solve(
+        blocks, r_kin, np.zeros(0))
+    assert delta_q.shape == (0,) and _relative(delta_g, expected) < 1e-9
 
 
 def test_a_cyclic_history_ends_where_the_dense_path_ends(spaces):
