@@ -339,8 +339,12 @@ class _Run:
             dissipation_in_cycle=self.state.dissipation - start_dissipation, state=self.state,
             clamp_force=self.clamp_force())
         law = solver.law
+        # finite sliding: the master's wear lives on its own surface (contact.sliding)
+        master_wear = getattr(self.state, "master_wear", None)
         summary.figures = cycle_figures(solver.area, self.nominal_area, cycle_status, max_util, self.state,
-                                        self.cof_initial, law.cof_max, self.procedure.area_tolerance)
+                                        self.cof_initial, law.cof_max, self.procedure.area_tolerance,
+                                        master_wear=master_wear,
+                                        master_area=None if master_wear is None else solver.pairing.master.area)
         summary.figures["active_slip_area_fraction"] = active_slip_area_fraction(
             solver.area, self.nominal_area, summary.pressure, summary.dissipation_in_cycle, start_cof,
             law.critical_slip, self.procedure.slip_tolerance)

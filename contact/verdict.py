@@ -1,7 +1,8 @@
 """The verdict of a procedure run and the figures it rests on (paper §3; SPEC §5).
 
 :func:`cycle_figures` gives the global figures of one load cycle (area fractions over the
-nominal contact area, stick margin, wear, dissipation); :func:`active_slip_area_fraction` the
+nominal contact area, stick margin, wear, dissipation); :func:`wear_figures` the worn volume
+and the deepest wear, each body's own in finite sliding; :func:`active_slip_area_fraction` the
 area that still slides in the sense of the verdict; :func:`loosening_evident` whether the clamp
 force keeps falling while the stick area shrinks; :func:`verdict` the engineer's answer
 (``stick``, ``partial_slip``, ``damage`` or ``loosening``; :data:`VERDICT_MEANINGS`). :class:`Ending` is why a run stopped. Pure functions of
@@ -52,11 +53,15 @@ def _fractions(area, nominal, mask):
 
 def cycle_figures(area: np.ndarray, nominal_area: float, status: np.ndarray,
                   max_utilised: np.ndarray, state: ContactState, cof_initial: np.ndarray,
-                  cof_max, area_tolerance: float) -> dict:
+                  cof_max, area_tolerance: float, master_wear: np.ndarray | None = None,
+                  master_area: np.ndarray | None = None) -> dict:
     """Global figures of a cycle: area fractions, margin, wear, dissipation.
 
     Fractions refer to the nominal contact area (closed after the preload). The stick margin
-    is 1 − max utilised COF / μ_max over points that stayed stuck.
+    is 1 − max utilised COF / μ_max over points that stayed stuck. The wear figures are
+    :func:`wear_figures`: ``master_wear`` (mm) and ``master_area`` (mm², mm in 2D) are the
+    master body's own wear field and its nodes' areas in finite sliding, None while the
+    pairing is fixed.
     """
     stuck = status == Status.STICK
     slipped = status >= Status.SLIP
@@ -72,11 +77,34 @@ def cycle_figures(area: np.ndarray, nominal_area: float, status: np.ndarray,
         # iterations raise μ by round-off amounts that are not fretting)
         "cof_evolved_area_fraction": _fractions(area, nominal_area, state.cof > cof_initial + 0.01 * (
             np.broadcast_to(cof_max, area.shape) - cof_initial)),
-        "max_wear_depth_mm": float(np.max(wear, initial=0.0)),
-        "wear_volume_mm3": float(np.sum(np.asarray(wear) * area)),
+        **wear_figures(area, state, master_wear, master_area),
         "dissipated_energy_mJ": float(np.sum(state.dissipation * area)),
         "min_stick_margin": float(margins.min()) if margins.size else None,
     }
+
+
+def wear_figures(area: np.ndarray, state: ContactState, master_wear: np.ndarray | None = None,
+                 master_area: np.ndarray | None = None) -> dict:
+    """``wear_volume_mm3``, the volume both bodies have lost, mm³ (mm² per mm in 2D), and
+    ``max_wear_depth_mm``, mm.
+
+    Pairing fixed (small sliding; ``master_wear`` None): each point's two depths lie on top of
+    each other, so the volume is Σ gap·A over the points and the depth is the deepest gap, the
+    two bodies' depths at one point added. Finite sliding: each body's depth lives on its own
+    surface (SPEC §4), and the master's scar reaches beyond the points' current partners. The
+    volume is then the slave's depth × the points' areas plus the master's own field ×
+    ``master_area`` (its nodes' areas), and the depth the deepest of the two bodies' own
+    fields, each body's alone: the two scars no longer lie on top of each other.
+    """
+    if state.wear_depth is None:
+        return {"max_wear_depth_mm": 0.0, "wear_volume_mm3": 0.0}
+    if master_wear is None:
+        gap = state.gap
+        return {"max_wear_depth_mm": float(np.max(gap, initial=0.0)),
+                "wear_volume_mm3": float(np.sum(np.asarray(gap) * area))}
+    slave = state.wear_depth[0]
+    return {"max_wear_depth_mm": float(max(np.max(slave, initial=0.0), np.max(master_wear, initial=0.0))),
+            "wear_volume_mm3": float(np.sum(slave * area) + np.sum(master_wear * master_area))}
 
 
 def active_slip_area_fraction(area: np.ndarray, nominal_area: float, pressure: np.ndarray,

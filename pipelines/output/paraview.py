@@ -4,7 +4,8 @@ The contact surface is written as its facets (lines in 2D, quadrilaterals or tri
 3D). ``interface.xdmf`` has one time step per recorded cycle, time the equivalent cycle number.
 ``interface_increments.xdmf`` (a run with ``[procedure] field_output``) has one per written
 increment, time (cycle − 1) + fraction of the cycle in simulated cycles: the end of cycle 3 is
-at 3.0, its peak load (fraction 0.25 of a sine cycle) at 2.25.
+at 3.0, its peak load (fraction 0.25 of a sine cycle) at 2.25. In finite sliding the master
+body's own final wear field is written on the master surface by :func:`write_master_final_vtu`.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ CELL_TYPES = {2: "line", 3: "triangle", 4: "quad"}
 def _point_data(fields: h5py.Group, row: int | None) -> dict:
     data = {}
     for name, dataset in fields.items():
-        if name == "cycle":
+        if name in ("cycle", "master_wear_depth"):  # the master's own field lives on its own surface
             continue
         value = dataset[()] if row is None else dataset[row]
         if name == "wear_depth":
@@ -36,10 +37,11 @@ def _point_data(fields: h5py.Group, row: int | None) -> dict:
     return data
 
 
-def _surface(file: h5py.File) -> tuple[np.ndarray, list]:
-    """Points (n, 3) mm and cells of the contact surface of a results file."""
-    points = file["points/coordinates"][()]
-    facets = file["points/facets"][()]
+def _surface(file: h5py.File, group: str = "points") -> tuple[np.ndarray, list]:
+    """Points (n, 3) mm and cells of the contact surface of a results file (``group`` points),
+    or of the master surface (master_surface)."""
+    points = file[f"{group}/coordinates"][()]
+    facets = file[f"{group}/facets"][()]
     if points.shape[1] == 2:
         points = np.column_stack([points, np.zeros(len(points))])
     return points, [(CELL_TYPES[facets.shape[1]], facets)]
@@ -88,4 +90,17 @@ def write_final_vtu(results_path: str | Path, out_path: str | Path) -> Path:
         points, cells = _surface(file)
         mesh = meshio.Mesh(points, cells, point_data=_point_data(file["final"], None))
     mesh.write(out_path)
+    return Path(out_path)
+
+
+def write_master_final_vtu(results_path: str | Path, out_path: str | Path) -> Path | None:
+    """The master body's own final wear depth (``master_wear_depth``, mm) on the master surface as
+    one .vtu file; None (nothing written) for a run whose master's wear has no field of its own
+    (small sliding: row 1 of ``wear_depth`` in ``interface_final.vtu`` holds it)."""
+    with h5py.File(results_path, "r") as file:
+        if "final/master_wear_depth" not in file:
+            return None
+        points, cells = _surface(file, "master_surface")
+        depth = file["final/master_wear_depth"][()]
+    meshio.Mesh(points, cells, point_data={"master_wear_depth": depth}).write(out_path)
     return Path(out_path)

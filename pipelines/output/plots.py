@@ -259,10 +259,23 @@ def _line_fields(file, coordinates, title, out_dir) -> Path:
                 initial = np.linalg.norm(initial.reshape(initial.shape[0], -1), axis=1)
             ax.plot(x, initial[order], "--", lw=1.0, label="first cycle")
             ax.legend(fontsize=7)
+        if field.name == "wear_depth" and "master_wear_depth" in file["final"]:
+            _master_profile(ax, file)
     fig.align_ylabels(axes)
     axes[-1].set_xlabel("position along the contact x [mm]")
     fig.suptitle(f"{title}: interface fields")
     return _save(fig, out_dir / "fields.png")
+
+
+def _master_profile(ax, file) -> None:
+    """Finite sliding: the master's own wear depth along its own surface, beside the points'
+    gap (the master's depth read at their current partners), which misses the scar they left."""
+    x = file["master_surface/coordinates"][()][:, 0]
+    order = np.argsort(x)
+    ax.lines[0].set_label("final, at the points (both bodies)")
+    ax.plot(x[order], file["final/master_wear_depth"][()][order], "--", lw=1.0,
+            label="master's own surface (its depth alone)")
+    ax.legend(fontsize=7)
 
 
 def _surface_maps(file, coordinates, title, out_dir) -> list[Path]:

@@ -33,7 +33,13 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
                            numbers as the cycle's row in /cycles/fields) and status, the
                            increment's own status (codes as /final/status; /cycles/fields/status
                            is the worst status over a whole cycle)
-    /final/                the final per-point fields
+    /final/                the final per-point fields. wear_depth (2, n): the slave's depth and the
+                           master's; in finite sliding the master's row is its depth read at each
+                           point's current partners (what the point's gap sees), and the master's
+                           own field is master_wear_depth (n_master,) mm on the nodes of
+                           /master_surface/ (its scar reaches beyond the points' partners)
+    /master_surface/       finite sliding only: the master surface's nodes, coordinates (n_master,
+                           dim) mm, area (n_master,) mm² (mm in 2D), facets (m, k) node indices
     /summary               attrs: verdict, stationary, figures (JSON)
     /histories/            only in a coupled run: the multibody histories that drive its loads, as
                            ``fretwork mbs`` writes them (time s, cw<k>_* signals; see
@@ -372,10 +378,24 @@ class ResultsWriter(Observer):
         for name, value in self._fields(last).items():
             final.create_dataset(name, data=value).attrs["units"] = FIELD_UNITS[name]
         final["status"].attrs["codes"] = STATUS_NAMES
+        master_wear = getattr(last.state, "master_wear", None)
+        if master_wear is not None:
+            self._write_master_wear(master_wear)
         summary = self.file.create_group("summary")
         summary.attrs.update(verdict=result.verdict, stationary=result.stationary,
                              figures=json.dumps(result.figures))
         return self.stop(result.ending)
+
+    def _write_master_wear(self, depth: np.ndarray) -> None:
+        """The master body's own wear field (finite sliding): ``/final/master_wear_depth`` on
+        the nodes of ``/master_surface/``, whose scar reaches beyond the points' partners."""
+        master = self.model.assembly.pairing.master
+        surface = self.file.create_group("master_surface")
+        for name, data, units in (("coordinates", master.coordinates, "mm"),
+                                  ("area", master.area, "mm^2 (mm per unit thickness in 2D)"),
+                                  ("facets", master.facets, "index")):
+            surface.create_dataset(name, data=data).attrs["units"] = units
+        self.file["final"].create_dataset("master_wear_depth", data=depth).attrs["units"] = "mm"
 
     def stop(self, ending) -> Path:
         """Mark the file with the run's :class:`contact.verdict.Ending`, close it and move it into
