@@ -10,11 +10,20 @@ groups of lower dimension (nodes of those faces/edges) and scikit-fem boundaries
 from *ELSET, volume physical groups and subdomains. Node sets of quadratic meshes (Tet10, Hex20)
 keep the file's mid-edge nodes; a scene's selections add those of edges whose corners a set holds
 (:func:`reduction.mesh.selection.select_body_nodes`). Coordinates in mm.
+
+Abaqus element types are read as the element of the same displacement interpolation
+(:data:`ABAQUS_SOLIDS`): the hybrid (H) variants carry an extra pressure unknown per element
+that enforces near-incompressibility; for the linear-elastic, compressible materials of a
+condensation it only restates the displacement solution, so C3D4H is read as Tet4, C3D10H and
+C3D10MH as Tet10, C3D8H as Hex8, C3D20H as Hex20. Reduced integration (R) changes the
+quadrature, not the interpolation: C3D8R is read as Hex8 (fully integrated), C3D20R as Hex20.
+Any other solid type (incompatible modes C3D8I, wedges, ...) is refused, naming the type and file.
 """
 
 from __future__ import annotations
 
 import io
+import re
 from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +46,19 @@ _SOLID_CELLS = {
     "triangle": (skfem.MeshTri1, 2),
     "quad": (skfem.MeshQuad1, 2),
 }
+#: Abaqus solid element types read (as the meshio type of the base element, said in their
+#: names): the type -> the base type of the same displacement interpolation (module doc)
+ABAQUS_SOLIDS = {
+    **dict.fromkeys(("C3D4", "C3D4H"), "C3D4"),
+    **dict.fromkeys(("C3D10", "C3D10H", "C3D10M", "C3D10MH", "C3D10I"), "C3D10"),
+    **dict.fromkeys(("C3D8", "C3D8H", "C3D8R", "C3D8RH"), "C3D8"),
+    **dict.fromkeys(("C3D20", "C3D20H", "C3D20R", "C3D20RH"), "C3D20"),
+    **dict.fromkeys(("CPE3", "CPE3H", "CPS3"), "CPS3"),  # a 2D mesh is plane strain whichever type wrote it
+    **dict.fromkeys(("CPE4", "CPE4H", "CPE4R", "CPE4RH", "CPS4", "CPS4R"), "CPS4"),
+}
+#: meshio reads these as Hex8, but their displacement field is not Hex8's
+_ENRICHED_HEX8 = ("C3D8I", "C3D8IH")
+_ABAQUS_ELEMENT = re.compile(r"^(\*\s*ELEMENT\s*,.*?\bTYPE\s*=\s*)([^,\s]+)", re.IGNORECASE | re.MULTILINE)
 _UNSUPPORTED_SOLIDS = {"wedge", "wedge15", "pyramid", "pyramid13", "hexahedron27",
                        "triangle6", "quad8", "quad9"}
 _SURFACE_CELLS = {"triangle", "quad", "triangle6", "quad8", "quad9", "line", "line3", "vertex"}
@@ -143,10 +165,11 @@ def _read_raw(path: Path, label: str) -> meshio.Mesh:
     complaints and ends the process (SystemExit) when no reader accepts a file: its output is
     kept out of the terminal and its exit becomes the error."""
     kind, reader = _READERS.get(path.suffix.lower(), ("a mesh", meshio.read))
+    source = _abaqus_base_types(path, label) if path.suffix.lower() == ".inp" else path
     noise = io.StringIO()
     try:
         with redirect_stdout(noise), redirect_stderr(noise):
-            return reader(path)
+            return reader(source)
     except SystemExit:
         raise InputError(f"{label} is not {kind} file that meshio can read; write it from the mesher as "
                          "Abaqus .inp or Gmsh .msh") from None
@@ -158,11 +181,37 @@ def _read_raw(path: Path, label: str) -> meshio.Mesh:
                          "complete (not truncated) and written in that format") from None
 
 
+def _abaqus_base_types(path: Path, label: str) -> io.StringIO:
+    """The text of an Abaqus file with each solid element type written as its base type
+    (:data:`ABAQUS_SOLIDS`), for meshio (which reads C3D4H as a cell type it does not know); an
+    InputError naming a type that is neither such a solid nor one meshio reads (surfaces, beams:
+    sets only). The buffer is named as the file: meshio finds *INCLUDE files next to it."""
+    text = path.read_text(errors="replace")
+
+    def base_type(match: re.Match) -> str:
+        kind = match.group(2).upper()
+        if kind in ABAQUS_SOLIDS:
+            return match.group(1) + ABAQUS_SOLIDS[kind]
+        if kind in meshio.abaqus._abaqus.abaqus_to_meshio_type and kind not in _ENRICHED_HEX8:
+            return match.group(0)
+        line = text.count("\n", 0, match.start()) + 1
+        why = (" (its incompatible modes enrich the displacement field beyond Hex8's: write the mesh as C3D8R, "
+               "C3D8 or C3D20R)" if kind in _ENRICHED_HEX8 else "")
+        raise InputError(f"{label}: unsupported element type {match.group(2)} (line {line}){why}; supported: "
+                         f"{', '.join(ABAQUS_SOLIDS)}")
+
+    buffer = io.StringIO(_ABAQUS_ELEMENT.sub(base_type, text))
+    buffer.name = str(path)
+    return buffer
+
+
 def _undefined_number(path: Path, number) -> str:
     """Say which number a file refers to without defining it: a node (of an element or a node set)
     or an element (of an element set)."""
     if path.suffix.lower() != ".inp" or number is None:
         return f"it refers to number {number}, which the file does not define"
+    if not str(number).lstrip("-").isdigit():  # meshio's cell type of an element type it lists but cannot read
+        return f"unsupported element type (meshio reads it as '{number}', a cell type it does not know)"
     if int(number) in _abaqus_node_numbers(path):
         return (f"an element set refers to element {number}, which the file does not define "
                 "(no *ELEMENT line has that number)")
