@@ -64,6 +64,12 @@ _MODAL_SUFFIX = {"modal_coordinate": "", "modal_velocity": "/s", "modal_accelera
 #: a step may differ from the median step by this fraction (fixed-step output rounded in time)
 STEP_TOLERANCE = 1e-6
 MIN_SAMPLES = 8
+#: a step longer than this fraction of a revolution cannot resolve the engine's own orders (4th
+#: and up); a file's time in ms labelled [s] lands far beyond it (a step of 1,000 times the true one)
+MAX_STEP_REVOLUTIONS = 1.0 / 8.0
+#: the mean spin about the crank axis may differ from ``speed_rpm`` by this fraction (the
+#: torsional vibration of the crankshaft stays well inside it)
+SPEED_TOLERANCE = 0.05
 #: cell types of the mode shapes' elements → nodes per cell (meshio/Abaqus node order)
 CELL_TYPES = {"tetra": 4, "tetra10": 10, "hexahedron": 8, "hexahedron20": 20}
 
@@ -425,10 +431,11 @@ def _text(value):
     return value.decode() if isinstance(value, bytes) else value
 
 
-def _parse_csv(path: Path) -> tuple[dict, list[str], np.ndarray]:
-    """('# key = value' metadata, header fields, (n, k) values) of a CSV file."""
-    meta, header, rows = {}, None, []
-    with path.open() as stream:
+def _parse_csv(path: Path) -> tuple[dict, list[str], int, np.ndarray]:
+    """('# key = value' metadata, header fields, the header's line number, (n, k) values) of a
+    CSV file. A UTF-8 byte-order mark (Excel's "CSV UTF-8") is dropped."""
+    meta, header, header_line, rows = {}, None, 0, []
+    with path.open(encoding="utf-8-sig") as stream:
         for number, line in enumerate(stream, 1):
             line = line.strip()
             if not line:
@@ -437,7 +444,7 @@ def _parse_csv(path: Path) -> tuple[dict, list[str], np.ndarray]:
                 key, _, value = line[1:].partition("=")
                 meta[key.strip()] = value.strip()
             elif header is None:
-                header = [field.strip() for field in line.split(",")]
+                header, header_line = [field.strip() for field in line.split(",")], number
             else:
                 try:
                     rows.append([float(value) for value in line.split(",")])
@@ -447,7 +454,7 @@ def _parse_csv(path: Path) -> tuple[dict, list[str], np.ndarray]:
                     raise InputError(f"{path}, line {number}: {len(rows[-1])} values for {len(header)} columns")
     if header is None or not rows:
         raise InputError(f"{path}: no header line and samples found")
-    return meta, header, np.array(rows)
+    return meta, header, header_line, np.array(rows)
 
 
 def _split_header(path: Path, field: str) -> tuple[str, str | None, str]:
@@ -459,11 +466,17 @@ def _split_header(path: Path, field: str) -> tuple[str, str | None, str]:
     return quantity.strip(), component.strip() or None, unit[:-1].strip()
 
 
-def _grouped(path: Path, header: list[str], table: np.ndarray) -> dict:
-    """{quantity: (labels or None, unit, values)} from CSV columns."""
+def _grouped(path: Path, header: list[str], line: int, table: np.ndarray) -> dict:
+    """{quantity: (labels or None, unit, values)} from CSV columns; ``line``: the header's line
+    number, for messages."""
     columns: dict = {}
+    seen: dict = {}
     for k, field in enumerate(header):
         quantity, component, unit = _split_header(path, field)
+        if (quantity, component) in seen:
+            raise InputError(f"{path}, line {line}: column '{field}' appears twice (columns "
+                             f"{seen[quantity, component]} and {k + 1}); give each column once")
+        seen[quantity, component] = k + 1
         labels, units, values = columns.setdefault(quantity, ([], set(), []))
         labels.append(component)
         units.add(unit)
@@ -479,15 +492,15 @@ def _grouped(path: Path, header: list[str], table: np.ndarray) -> dict:
 
 
 def _read_csv(path: Path):
-    meta, header, table = _parse_csv(path)
-    columns = _grouped(path, header, table)
+    meta, header, line, table = _parse_csv(path)
+    columns = _grouped(path, header, line, table)
     modes = None
     if "mode_shapes" in meta:
         modes_path = path.parent / meta["mode_shapes"]
         if not modes_path.is_file():
             raise InputError(f"{path}: its mode-shape file {modes_path} does not exist")
-        mode_meta, mode_header, mode_table = _parse_csv(modes_path)
-        grouped = _grouped(modes_path, mode_header, mode_table)
+        mode_meta, mode_header, mode_line, mode_table = _parse_csv(modes_path)
+        grouped = _grouped(modes_path, mode_header, mode_line, mode_table)
         if "mode_shape" not in grouped:
             raise InputError(f"{modes_path}: missing columns 'mode_shape:K.x [unit]' …")
         labels, unit, values = grouped["mode_shape"]
@@ -556,7 +569,9 @@ def _checked(path: Path, meta: dict, columns: dict, modes: ModeShapes | None) ->
     try:
         speed = float(meta["speed_rpm"])
     except (KeyError, ValueError):
-        raise InputError(f"{path}: needs the engine speed 'speed_rpm' (rpm) in its metadata") from None
+        speed = math.nan
+    if not speed > 0.0 or not math.isfinite(speed):
+        raise InputError(f"{path}: needs the engine speed 'speed_rpm' (rpm, > 0) in its metadata")
     for quantity, (components, _, required) in QUANTITIES.items():
         if required and quantity not in columns:
             expected = quantity if components is None else ", ".join(f"{quantity}:{c}" for c in components)
@@ -573,14 +588,16 @@ def _checked(path: Path, meta: dict, columns: dict, modes: ModeShapes | None) ->
         if components is not None and tuple(labels or ()) != components:
             raise InputError(f"{path}: '{quantity}' must have the components {', '.join(components)} in this "
                              f"order, got {labels}")
-        values[quantity] = data * _factor(path, quantity, unit, units)
-    time = values["time"]
-    _check_sampling(path, time)
+        values[quantity] = _shaped(path, quantity, components, data) * _factor(path, quantity, unit, units)
+    _, time_unit, stored = columns["time"]
+    time = values["time"] = _sampled_time(path, values["time"], _resolution(stored) * QUANTITIES["time"][1][time_unit])
     for quantity, data in values.items():
         if len(data) != len(time):
             raise InputError(f"{path}: '{quantity}' has {len(data)} samples, 'time' has {len(time)}")
         if not np.all(np.isfinite(data)):
             raise InputError(f"{path}: '{quantity}' holds non-finite values")
+    _check_speed(path, speed, values["angular_velocity"][:, 2])
+    _check_revolution_sampling(path, speed, time, time_unit)
     q = values.get("modal_coordinate")
     if (q is None) != (modes is None):
         raise InputError(f"{path}: modal coordinates and mode shapes go together: give both or neither")
@@ -608,15 +625,78 @@ def _modal_factor(path: Path, quantity: str, unit: str, modes: ModeShapes | None
     return 1.0
 
 
-def _check_sampling(path: Path, time: np.ndarray) -> None:
-    """Fixed-step samples: at least MIN_SAMPLES, increasing, every step the median step."""
-    if time.ndim != 1 or len(time) < MIN_SAMPLES:
+def _shaped(path: Path, quantity: str, components, data: np.ndarray) -> np.ndarray:
+    """The samples of one quantity: (n,) for a scalar (an HDF5 dataset of shape (n, 1) or (1, n)
+    taken as (n,)), (n, 3) for a vector."""
+    if components is None:
+        if data.ndim == 2 and 1 in data.shape:
+            data = data.ravel()
+        if data.ndim != 1:
+            raise InputError(f"{path}: '{quantity}' must hold one value per sample, shape (samples,), "
+                             f"got shape {data.shape}")
+    elif data.ndim != 2 or data.shape[1] != len(components):
+        raise InputError(f"{path}: '{quantity}' must have the shape (samples, {len(components)}), got {data.shape}")
+    return data
+
+
+def _resolution(stored) -> float:
+    """The spacing of the stored numbers at their largest magnitude, in their unit, when they are
+    stored with less precision than float64 (an HDF5 float32 dataset), else 0."""
+    stored = np.asarray(stored)
+    if stored.dtype.kind != "f" or stored.dtype.itemsize >= 8 or not stored.size:
+        return 0.0
+    return float(np.spacing(np.max(np.abs(stored))))
+
+
+def _sampled_time(path: Path, time: np.ndarray, resolution: float) -> np.ndarray:
+    """The time (s) after the sampling checks (:func:`_check_sampling`). Time stored with less
+    precision than float64 (``resolution`` s > 0: the spacing of its numbers) is checked to within
+    that spacing and rebuilt as the fixed-step samples it stands for, in float64."""
+    _check_sampling(path, time, resolution)
+    if resolution == 0.0:
+        return time
+    step = (time[-1] - time[0]) / (len(time) - 1)
+    return time[0] + step * np.arange(len(time))
+
+
+def _check_sampling(path: Path, time: np.ndarray, resolution: float) -> None:
+    """Fixed-step samples: at least MIN_SAMPLES, increasing, every step the median step (to within
+    STEP_TOLERANCE, and two spacings ``resolution`` of numbers stored with less precision)."""
+    if len(time) < MIN_SAMPLES:
         raise InputError(f"{path}: needs at least {MIN_SAMPLES} samples of 'time', got {len(time)}")
     steps = np.diff(time)
     step = float(np.median(steps))
-    bad = np.flatnonzero(~(np.abs(steps - step) <= STEP_TOLERANCE * step))
+    if resolution > 0.01 * abs(step):
+        raise InputError(f"{path}: 'time' is stored in single precision (float32), whose numbers are "
+                         f"{resolution:.3g} s apart at t = {np.max(np.abs(time)):.6g} s, too coarse for the "
+                         f"step {step:.6g} s: store it as float64")
+    bad = np.flatnonzero(~(np.abs(steps - step) <= STEP_TOLERANCE * step + 2.0 * resolution))
     if step <= 0 or bad.size:
         k = int(bad[0]) if bad.size else 0
         raise InputError(f"{path}: non-uniform time step: {steps[k]:.6g} s between samples {k + 1} and {k + 2} "
                          f"(t = {time[k]:.6g} s), the median step is {step:.6g} s; give fixed-step samples "
                          "without gaps (resample the file)")
+
+
+def _check_speed(path: Path, speed_rpm: float, spin: np.ndarray) -> None:
+    """The mean spin about the crank axis (rad/s, either sense) is the engine speed
+    ``speed_rpm``, to within SPEED_TOLERANCE."""
+    mean_rpm = abs(float(np.mean(spin))) * 30.0 / math.pi
+    if abs(mean_rpm - speed_rpm) > SPEED_TOLERANCE * speed_rpm:
+        raise InputError(f"{path}: speed_rpm = {speed_rpm:g}, but the mean angular velocity about the crank axis "
+                         f"(angular_velocity:z) is {mean_rpm * math.pi / 30.0:.6g} rad/s = {mean_rpm:.6g} rpm; they "
+                         f"must agree within {SPEED_TOLERANCE:.0%} (check speed_rpm and the unit of angular_velocity)")
+
+
+def _check_revolution_sampling(path: Path, speed_rpm: float, time: np.ndarray, unit: str) -> None:
+    """At least 1/MAX_STEP_REVOLUTIONS samples per revolution at ``speed_rpm``."""
+    revolution = 60.0 / speed_rpm
+    step = float(np.median(np.diff(time)))
+    if step <= MAX_STEP_REVOLUTIONS * revolution:
+        return
+    advice = "sample the histories more finely"
+    if unit == "s" and step * 1e-3 <= MAX_STEP_REVOLUTIONS * revolution:
+        advice = "if the time is in ms, label the column 'time [ms]'"
+    raise InputError(f"{path}: the time step {step:.6g} s is {step / revolution:.3g} "
+                     f"revolutions at speed_rpm = {speed_rpm:g} (one revolution: {revolution:.6g} s); a history "
+                     f"needs at least {1.0 / MAX_STEP_REVOLUTIONS:.0f} samples per revolution: {advice}")

@@ -232,6 +232,10 @@ def cycle_loading(loading: MultibodyLoading, cycle: str, wing_amplitude_mm: floa
 
     cycle: "wing_period" or "revolution"; wing_amplitude_mm: the stated wing amplitude (mm), or
     None for the multibody one; n_samples: samples of the cycle (the increments per cycle).
+
+    Histories from a file whose wing torsion does not vibrate (a static check: constant loads)
+    give, without a stated amplitude, the static cycle: every history its mean (scale 0), one
+    cycle per revolution.
     """
     if cycle not in CYCLES:
         raise InputError(f"'coupling.cycle' must be one of {CYCLES}, got {cycle!r}")
@@ -239,11 +243,24 @@ def cycle_loading(loading: MultibodyLoading, cycle: str, wing_amplitude_mm: floa
     signals = _signals(loading)
     synthesis = _wing_period_synthesis if cycle == "wing_period" else _revolution_synthesis
     synthesise, reference, frequency = synthesis(loading, signals, phases)
-    if reference <= 0.0:
-        raise InputError("the multibody run shows no wing vibration to scale (zero wing torsion): "
-                         "switch on an excitation in [mbs] effects")
     amplitude = loading.wing_amplitude if wing_amplitude_mm is None else wing_amplitude_mm
-    scale = amplitude / reference
+    # a constant wing torsion fits a harmonic of round-off size, not a vibration to scale
+    if reference <= 1e-12 * float(np.max(np.abs(loading.wing_torsion))):
+        if loading.revolutions is not None:  # the in-process multibody model, not a file
+            raise InputError("the multibody run shows no wing vibration to scale (zero wing torsion): "
+                             "switch on an excitation in [mbs] effects")
+        if wing_amplitude_mm is not None:
+            raise InputError(f"the wing torsion of the interface histories does not vibrate, and a signal without "
+                             f"vibration cannot be scaled to the stated 'coupling.wing_amplitude' = "
+                             f"{wing_amplitude_mm:g} mm; leave 'coupling.wing_amplitude' out for a static check "
+                             "(every history its mean)")
+        means = {name: float(np.mean(values)) for name, values in signals.items()}
+
+        def synthesise(name, scale):
+            return np.full(n_samples, means[name])
+        amplitude, scale, frequency = 0.0, 0.0, 1.0 / loading.revolution_period
+    else:
+        scale = amplitude / reference
     tables = {}
     for axis in _AXES:
         tables[f"frame_a{axis}"] = synthesise(f"frame_a{axis}", scale)

@@ -158,3 +158,121 @@ def test_unknown_mode_shape_cells_are_refused(tmp_path):
         root["modes/cells"].attrs["cell_type"] = "wedge"
     with pytest.raises(InputError, match="mode-shape cells must be tetra .* hexahedron20 \\(n, 20\\), got 'wedge'"):
         read_interface_histories(path)
+
+
+def test_a_column_given_twice_is_refused_naming_it_and_its_line(tmp_path):
+    header = HEADER.replace("wing_torsion [um]\n", "wing_torsion [um],wing_torsion [um]\n")
+    rows = "".join(f"{t:g},1,2,3,0,0,750,0,0,180,5,5\n" for t in np.arange(10) * 0.1)
+    with pytest.raises(InputError, match=r"line 4: column 'wing_torsion \[um\]' appears twice \(columns 11 and 12\)"):
+        read_interface_histories(_csv(tmp_path, header + rows))
+
+
+def test_a_byte_order_mark_is_read_past(tmp_path):
+    """Excel's "CSV UTF-8" starts the file with a byte-order mark, before '# format'."""
+    path = write_interface_histories(tmp_path / "cw.csv", _histories())
+    path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    np.testing.assert_array_equal(read_interface_histories(path).wing_torsion, _histories().wing_torsion)
+
+
+def test_a_time_in_ms_labelled_seconds_is_refused_naming_ms(tmp_path):
+    """0.1 ms steps read as 0.1 s: more than 1/8 of a revolution at 750 rpm (0.08 s)."""
+    with pytest.raises(InputError, match=r"time step 0.1 s is 1.25 revolutions at speed_rpm = 750 .*"
+                                         r"if the time is in ms, label the column 'time \[ms\]'"):
+        read_interface_histories(_csv(tmp_path, HEADER.replace("time [ms]", "time [s]") + _rows(np.arange(10) * 0.1)))
+
+
+def test_a_speed_other_than_the_spin_is_refused_naming_both(tmp_path):
+    path = _csv(tmp_path, HEADER + _rows(np.arange(10) * 0.1))
+    path.write_text(path.read_text().replace("speed_rpm = 750", "speed_rpm = 1500"))
+    with pytest.raises(InputError, match=r"speed_rpm = 1500, but the mean angular velocity .* is 78.5398 rad/s = "
+                                         r"750 rpm; they must agree within 5%"):
+        read_interface_histories(path)
+
+
+def _rewrite_hdf5(path, name, values):
+    import h5py
+
+    with h5py.File(path, "r+") as root:
+        unit = root[name].attrs["unit"]
+        del root[name]
+        root.create_dataset(name, data=values).attrs["unit"] = unit
+
+
+@pytest.mark.parametrize("shape", ["column", "row"])
+def test_an_hdf5_time_of_one_column_or_row_is_the_time(tmp_path, shape):
+    written = _histories()
+    path = write_interface_histories(tmp_path / "cw.h5", written)
+    _rewrite_hdf5(path, "time", written.time[:, None] if shape == "column" else written.time[None, :])
+    np.testing.assert_array_equal(read_interface_histories(path).time, written.time)
+
+
+def test_an_hdf5_time_of_two_columns_is_refused_naming_its_shape(tmp_path):
+    written = _histories()
+    path = write_interface_histories(tmp_path / "cw.h5", written)
+    _rewrite_hdf5(path, "time", np.column_stack([written.time, written.time]))
+    with pytest.raises(InputError, match=r"'time' must hold one value per sample, shape \(samples,\), "
+                                         r"got shape \(40, 2\)"):
+        read_interface_histories(path)
+
+
+def test_an_hdf5_float32_time_is_a_fixed_step_to_within_float32(tmp_path):
+    """float32 time rounds each 50 us step by up to 6e-8 s near 1 s: 1e-3 of the step, far more
+    than the 1e-6 the steps of a float64 file may differ by. Read back: the fixed step it stands for."""
+    written = replace(_histories(n=400, step=5e-5), time=0.48 + 5e-5 * np.arange(400))
+    path = write_interface_histories(tmp_path / "cw.h5", written)
+    _rewrite_hdf5(path, "time", written.time.astype(np.float32))
+    read = read_interface_histories(path).time
+    spacing = float(np.spacing(np.float32(0.5)))  # of float32 numbers in [0.5, 1)
+    steps = np.diff(read)
+    assert read.dtype == np.float64 and np.ptp(steps) <= 1e-9 * 5e-5
+    np.testing.assert_allclose(steps, 5e-5, rtol=0, atol=2 * spacing / 399)
+    np.testing.assert_allclose(read, written.time, rtol=0, atol=spacing)
+
+
+def test_an_hdf5_float32_time_too_coarse_for_its_step_is_refused_naming_float32(tmp_path):
+    written = replace(_histories(n=400, step=5e-5), time=2000.0 + 5e-5 * np.arange(400))
+    path = write_interface_histories(tmp_path / "cw.h5", written)
+    _rewrite_hdf5(path, "time", written.time.astype(np.float32))
+    with pytest.raises(InputError, match=r"'time' is stored in single precision \(float32\).*store it as float64"):
+        read_interface_histories(path)
+
+
+def _constant_loading(tmp_path, wing_torsion):
+    """A static check's file: the centrifugal frame acceleration of 230 mm at 750 rpm, constant,
+    over a little more than one revolution (the revolution cycle takes the last one)."""
+    from mbs.histories_file import to_loading
+
+    n = 1700
+    time = 0.48 + 5e-5 * np.arange(n)
+    spin = 750.0 * np.pi / 30.0
+    frame = np.tile([0.0, -230.0 * spin ** 2, 0.0], (n, 1))
+    histories = InterfaceHistories(750.0, time, frame, np.tile([0.0, 0.0, spin], (n, 1)), np.zeros((n, 3)),
+                                   wing_torsion(time), np.zeros((n, 0)), np.zeros((n, 0)), np.zeros((n, 0)), None)
+    return to_loading(read_interface_histories(write_interface_histories(tmp_path / "const.csv", histories)))
+
+
+@pytest.mark.parametrize("cycle", ["wing_period", "revolution"])
+@pytest.mark.parametrize("torsion", [0.0, 3e-3], ids=["zero", "constant"])
+def test_histories_without_vibration_give_the_static_cycle(tmp_path, cycle, torsion):
+    from mbs.loading import cycle_loading
+
+    loading = _constant_loading(tmp_path, lambda time: np.full(len(time), torsion))
+    static = cycle_loading(loading, cycle, None, 8)
+    assert static.scale == 0.0 and static.wing_amplitude == 0.0 and static.frequency_hz == 750.0 / 60.0
+    np.testing.assert_allclose(static.tables["frame_ay"], np.full(8, loading.frame_acceleration[0, 1]), rtol=1e-15)
+    np.testing.assert_allclose(static.tables["spin_squared"], np.full(8, loading.angular_velocity[0, 2] ** 2),
+                               rtol=1e-15)
+    np.testing.assert_allclose(static.wing_torsion, np.full(8, torsion), rtol=1e-15)
+
+
+def test_a_stated_amplitude_for_histories_without_vibration_is_refused_naming_the_static_check(tmp_path):
+    from mbs.loading import cycle_loading
+
+    loading = _constant_loading(tmp_path, np.zeros_like)
+    with pytest.raises(InputError, match=r"cannot be scaled to the stated 'coupling.wing_amplitude' = 0.1 mm; "
+                                         r"leave 'coupling.wing_amplitude' out for a static check"):
+        cycle_loading(loading, "wing_period", 0.1, 8)
+    in_process = replace(loading, revolutions=12.0)  # what the exudyn run gives: its excitation is off
+    for amplitude in (None, 0.1):
+        with pytest.raises(InputError, match=r"switch on an excitation in \[mbs\] effects"):
+            cycle_loading(in_process, "wing_period", amplitude, 8)

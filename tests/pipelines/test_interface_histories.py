@@ -6,8 +6,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from mbs.histories_file import InterfaceHistories, write_interface_histories
 from pipelines import scene as scenes
 from pipelines.cli.main import main
 from pipelines.jobs.run import run_scene
@@ -58,3 +60,38 @@ def test_histories_exported_by_fretwork_mbs_reproduce_the_in_process_coupling(tm
     assert direct["verdict"] == read["verdict"]
     assert {k: v for k, v in direct.items() if k not in NOT_FIGURES} == \
         {k: v for k, v in read.items() if k not in NOT_FIGURES}
+
+
+def _constant_histories(folder: Path, name: str, wing_torsion_mm: float) -> str:
+    """A static check's file for the user joint (examples/user_joint.toml): the centrifugal frame
+    acceleration of 230 mm at 750 rpm, constant, and a wing torsion of that amplitude at 375 Hz."""
+    n = 400
+    time = 0.48 + 5e-5 * np.arange(n)
+    spin = 750.0 * np.pi / 30.0
+    frame = np.tile([0.0, -230.0 * spin ** 2, 0.0], (n, 1))
+    histories = InterfaceHistories(750.0, time, frame, np.tile([0.0, 0.0, spin], (n, 1)), np.zeros((n, 3)),
+                                   wing_torsion_mm * np.sin(2 * np.pi * 375.0 * time), np.zeros((n, 0)),
+                                   np.zeros((n, 0)), np.zeros((n, 0)), None)
+    write_interface_histories(folder / name, histories)
+    return name
+
+
+def test_a_static_check_from_a_file_is_the_constant_load_run(tmp_path):
+    """Zero wing torsion and no stated amplitude: the load cycle is the histories' means. Its clamp
+    force is that of the same loads with a 1e-6 mm wing vibration (QA: stick, 803,385.5 N), to
+    what 1e-6 mm of a bolt's stretch carries (8e5 N/mm: 0.8 N)."""
+    joint = (EXAMPLES / "user_joint.toml").read_text().replace('"user_joint/', f'"{EXAMPLES / "user_joint"}/')
+    joint = "\n".join(line for line in joint.splitlines() if not line.startswith("wing_amplitude"))
+    joint = joint.replace(', "flexible_counterweight", "gas_torque", "gear_mesh"]', "]")
+    summaries = {}
+    for name, torsion in (("static", 0.0), ("tiny", 1e-6)):
+        histories = _constant_histories(tmp_path, f"{name}.csv", torsion)
+        scene = tmp_path / f"{name}.toml"
+        scene.write_text(joint.replace('\nfields = "wing_mode"', f'\nfields = "all"\nhistories = "{histories}"'))
+        summaries[name] = run_scene(scenes.load(scene), tmp_path / name, progress=False, plots=False).summary
+    static, tiny = summaries["static"], summaries["tiny"]
+    assert static["vibration_scale"] == 0.0 and static["wing_amplitude_mm"] == 0.0
+    assert tiny["wing_amplitude_mm"] == pytest.approx(1e-6, rel=1e-3)
+    assert static["verdict"] == tiny["verdict"] == "stick"
+    assert static["clamp_force_N"] == pytest.approx(tiny["clamp_force_N"], abs=8e5 * 1e-6)
+    assert static["clamp_force_N"] == pytest.approx(803385.5, abs=8e5 * 1e-6)
