@@ -22,6 +22,7 @@ from contact.sparse import decide_path, space_of
 from pipelines.coupling import Coupled, CouplingSettings, coupled_patterns, coupled_program, multibody_loading
 from reduction.mesh import generators as meshes
 from pipelines.scene import Scene
+from pipelines.scene.checks import mesh_unit_problem
 from pipelines.stages import StageCache
 from reduction.body_loads import centrifugal, gravity
 from reduction.elasticity import assemble_elastic_body
@@ -92,6 +93,10 @@ def _body_mesh(scene: Scene, name: str, spec: dict, override):
     mesh = mesh if override is None else override
     if mesh.dim() != scene.dimension:
         raise InputError(f"'bodies.{name}.mesh' is {mesh.dim()}D but the scene is {scene.dimension}D")
+    if sets is not None:
+        problem = mesh_unit_problem(scene.data, name, mesh.p.min(axis=1), mesh.p.max(axis=1), sets.source)
+        if problem:
+            raise InputError(problem)
     return mesh, sets
 
 

@@ -35,6 +35,7 @@ import numpy as np
 from contact.tabulated import TabulatedProgram
 from mbs.loading import CycleLoading, MultibodyLoading, counterweight_loading, cycle_loading
 from pipelines.scene import Scene
+from pipelines.scene.checks import mesh_unit_problem
 from pipelines.scene.schema import MULTIBODY_EFFECTS
 from pipelines.stages import StageCache
 from reduction import modal_loads
@@ -131,6 +132,7 @@ def _file_counterweight(scene: Scene, base: Path) -> dict:
         # said here, before the multibody stage reads it, in the scene's own key
         raise InputError(f"'bodies.{name}.mesh.file': {path} "
                          + ("is a folder, not a mesh file" if path.is_dir() else "does not exist"))
+    _check_units(scene, name, path)
     return {"mesh_file": str(path), "interface": face,
             "youngs_modulus": material["youngs_modulus"], "poisson_ratio": material["poisson_ratio"],
             "density": material["density"]}
@@ -162,6 +164,20 @@ def multibody_loading(scene: Scene, cache: StageCache | None = None) -> Multibod
     cache = cache or StageCache(None)
     return cache.get("multibody", {"params": params, "counterweight": counterweight},
                      lambda: counterweight_loading(params, counterweight))
+
+
+def _check_units(scene: Scene, name: str, path: Path) -> None:
+    """The CW's mesh file, which the multibody model reduces, read before the multibody run and
+    its size checked against the scene's lengths for the body (reference points, selections): a
+    CW in metres would make the run fail in exudyn's time integration (a body 10⁹ times too light)
+    instead of here, in words (:func:`pipelines.scene.checks.mesh_unit_problem`)."""
+    from reduction.mesh.io import read_mesh
+
+    points = read_mesh(path, f"bodies.{name}.mesh.file").points
+    problem = mesh_unit_problem(scene.data, name, points.min(axis=0), points.max(axis=0),
+                                f"'bodies.{name}.mesh.file': {scene.data['bodies'][name]['mesh']['file']}")
+    if problem:
+        raise InputError(problem + " (it is the multibody counterweight too: checked before the multibody run)")
 
 
 def _check_geometry(mesh, loading: MultibodyLoading) -> None:

@@ -3,10 +3,14 @@ reference points, bolts, patterns), node selections and effects.
 
 Each check appends its problems, sentences naming their key, to a list; :func:`pipelines.scene.schema.validate`
 runs a check only when the schema found the tables it reads (:data:`SEMANTIC_CHECKS`) sound in structure.
+:func:`plausibility` warns of magnitudes that are likely unit mistakes; :func:`mesh_unit_problem`
+compares a mesh file's size, once it is read, with the scene's lengths for its body (a mesh in metres).
 Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
 """
 
 from __future__ import annotations
+
+import math
 
 from contact.procedure import Procedure
 from mbs.scene import mbs_table_problems
@@ -226,12 +230,57 @@ def _check_bolts(data, problems):
     dim = data["scene"]["dimension"]
     for name, bolt in bolts.items():
         axis = bolt["axis"]
-        if len(axis) != dim or not any(axis):
+        if len(axis) != dim or not all(_number(a) for a in axis) or not any(axis):
             problems.append(f"'bolts.{name}.axis' must be a nonzero vector of {dim} numbers")
+            axis = None
+        elif not abs(math.hypot(*axis) - 1.0) <= _UNIT_TOLERANCE:  # not: a NaN component is no unit vector
+            problems.append(f"'bolts.{name}.axis' = {axis} has length {math.hypot(*axis):g}: it must be a unit "
+                            f"vector (from head to nut), e.g. {[round(a / math.hypot(*axis), 6) + 0.0 for a in axis]}")
+            axis = None
+        ends = {}
         for end in ("head", "nut"):
             body, _, point = bolt[end].partition(".")
-            if point not in data["bodies"].get(body, {}).get("reference_points", {}):
+            reference = data["bodies"].get(body, {}).get("reference_points", {}).get(point)
+            if reference is None:
                 problems.append(f"'bolts.{name}.{end}' names '{bolt[end]}', which is not a reference point")
+            else:
+                ends[end] = (body, reference)
+        if len(ends) < 2:
+            continue
+        (head_body, head), (nut_body, nut) = ends["head"], ends["nut"]
+        if head_body == nut_body:
+            problems.append(f"'bolts.{name}.head' ('{bolt['head']}') and 'bolts.{name}.nut' ('{bolt['nut']}') are on "
+                            f"the same body '{head_body}': a bolt clamps two bodies, its head on one and its nut "
+                            "(or thread) on the other")
+        elif axis is not None:
+            positions = [end.get("position") if isinstance(end, dict) else None for end in (head, nut)]
+            problems += _bolt_axis_problems(name, bolt, axis, *positions, dim)
+
+
+#: |axis| within this of 1; the axis within this angle of the head-to-nut direction, degrees
+_UNIT_TOLERANCE = 1e-6
+_AXIS_ANGLE_DEG = 1.0
+
+
+def _bolt_axis_problems(name, bolt, axis, head, nut, dim) -> list[str]:
+    """The bolt's axis against the direction from its head's reference-point position to its
+    nut's, when both are known (a bolt whose axis points the other way pulls its ends apart, and
+    a tilted one shears the joint instead of clamping it)."""
+    if not all(isinstance(p, list) and len(p) == dim and all(_number(c) for c in p) for p in (head, nut)):
+        return []
+    span = [b - a for a, b in zip(head, nut)]
+    length = math.hypot(*span)
+    if length == 0.0:
+        return []
+    cosine = sum(a * d for a, d in zip(axis, span)) / length
+    angle = math.degrees(math.acos(max(-1.0, min(1.0, cosine))))
+    if angle <= _AXIS_ANGLE_DEG:
+        return []
+    direction = [round(d / length, 6) + 0.0 for d in span]
+    how = "points from the nut to the head" if angle > 179.0 else f"is {angle:.3g}° off the line from head to nut"
+    return [f"'bolts.{name}.axis' = {axis} {how}: the reference points' positions "
+            f"('{bolt['head']}' at {head}, '{bolt['nut']}' at {nut} mm) give the direction {direction}; "
+            "the axis must point from the head to the nut"]
 
 
 def _held_groups(data) -> list[list[str]]:
@@ -376,3 +425,71 @@ def plausibility(data: dict) -> list[str]:
                 found.append(f"'body_loads[{k}].angular_velocity' has magnitude {size:g} rad/s: probably rpm "
                              f"(rad/s expected: {size:g} rpm is {size * 3.141592653589793 / 30:.4g} rad/s)")
     return found
+
+
+#: a mesh read from a file smaller than this (mm) across while the scene places its body's
+#: points and selections at least _SCENE_LENGTH (mm) from it is most likely in metres
+_TINY_MESH = 1.0
+_SCENE_LENGTH = 10.0
+
+
+def _body_lengths(data: dict, body: str):
+    """(key, point or (axis, coordinate)) of the lengths the scene gives for ``body``: reference-point
+    positions and the boxes, rings and planes of its selections (mm). Reads unvalidated tables safely."""
+    spec = data.get("bodies", {}).get(body, {})
+    references = spec.get("reference_points", {}) if isinstance(spec.get("reference_points"), dict) else {}
+    fixed = spec.get("fixed", [])
+    selections = [(f"bodies.{body}.fixed", fixed.get("nodes"))] if isinstance(fixed, dict) else \
+        [(f"bodies.{body}.fixed[{k}]", t.get("nodes")) for k, t in enumerate(fixed) if isinstance(t, dict)]
+    for name, ref in references.items():
+        if isinstance(ref, dict):
+            yield f"bodies.{body}.reference_points.{name}.position", ref.get("position")
+            selections.append((f"bodies.{body}.reference_points.{name}.nodes", ref.get("nodes")))
+    contact = data.get("contact", {}) if isinstance(data.get("contact"), dict) else {}
+    selections += [(f"contact.{role}", contact[role]) for role in ("slave", "master")
+                   if isinstance(contact.get(role), dict) and contact[role].get("body") == body]
+    for where, selection in selections:
+        if not isinstance(selection, dict):
+            continue
+        boxes = [selection["box"]] if "box" in selection else selection.get("boxes", [])
+        for k, box in enumerate(boxes if isinstance(boxes, list) else []):
+            for corner in box if isinstance(box, list) else []:
+                yield f"{where}.{'box' if 'box' in selection else f'boxes[{k}]'}", corner
+        ring = selection.get("ring")
+        if isinstance(ring, dict):
+            yield f"{where}.ring.center", ring.get("center")
+        if selection.get("axis") in ("x", "y", "z"):
+            yield f"{where}.value", ("xyz".index(selection["axis"]), selection.get("value"))
+
+
+def _distance_from_box(length, low, high) -> float | None:
+    """Distance (mm) of a point, or of a plane (axis, coordinate), from the box low…high; None
+    for anything else."""
+    if isinstance(length, tuple):
+        axis, value = length
+        if not (_number(value) and math.isfinite(value)) or axis >= len(low):
+            return None
+        return max(low[axis] - value, 0.0, value - high[axis])
+    if not (isinstance(length, list) and len(length) == len(low) and all(_number(c) for c in length)):
+        return None
+    distance = math.hypot(*(max(lo - c, 0.0, c - hi) for c, lo, hi in zip(length, low, high)))
+    return distance if math.isfinite(distance) else None
+
+
+def mesh_unit_problem(data: dict, body: str, low, high, source: str) -> str | None:
+    """A body's mesh file most likely written in metres: the mesh (box ``low``…``high``, mm) is
+    less than :data:`_TINY_MESH` across while the scene places the body's reference points or
+    selections :data:`_SCENE_LENGTH` or more from it; the sentence names the file (``source``),
+    the mesh's size and the farthest such key. None when the sizes agree."""
+    sizes = [float(hi - lo) for lo, hi in zip(low, high)]
+    if not max(sizes) < _TINY_MESH:
+        return None
+    found = [(d, key) for key, length in _body_lengths(data, body)
+             if (d := _distance_from_box(length, low, high)) is not None]
+    if not found or max(found)[0] < _SCENE_LENGTH:
+        return None
+    distance, key = max(found)
+    across = " × ".join(f"{s:.3g}" for s in sizes)
+    return (f"{source}: the mesh is {max(sizes):.3g} mm across ({across} mm), but '{key}' lies {distance:.3g} mm "
+            f"from it: the mesh is probably in metres (fretwork reads mm, so {max(sizes):.3g} m would be "
+            f"{1e3 * max(sizes):.4g} mm); export it in mm or scale its coordinates by 1000")

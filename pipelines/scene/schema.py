@@ -237,16 +237,27 @@ def _check_table(table, schema, where, problems) -> bool:
     return sound
 
 
+def _misplaced_base(data: dict) -> str:
+    """The one problem of a scene with ``base`` above its tables: the base is not read, so the
+    tables it would give are missing, and saying each of them would bury the cause."""
+    line = f'base = "{data["base"]}"' if isinstance(data["base"], str) else "base = \"...\""
+    return (f"'{line}' stands above the first table, so it is no key of [scene] and no base is read: move "
+            "it to a line below [scene]; the scene's other problems are listed once its base is read")
+
+
 def validate(data: dict, source: str = "scene") -> list[str]:
     """All problems of a parsed scene, each a sentence naming its key; empty when valid.
 
     The schema is checked first, table by table; each semantic check (cross-references, effects,
     selections) then runs when the tables it reads are sound in structure (:func:`_check_table`):
-    a malformed table has been reported, and its cross-references cannot be followed."""
+    a malformed table has been reported, and its cross-references cannot be followed. A ``base``
+    above the first table is the one problem said (:func:`_misplaced_base`)."""
     # checks.py reads this module's tables, so it is imported here rather than at the top
     from pipelines.scene.checks import SEMANTIC_CHECKS
 
     problems: list[str] = []
+    if "base" in data:
+        return [_misplaced_base(data)]
     for key in data:
         if key not in TOP_LEVEL:
             problems.append(f"unknown table '{key}'{_suggest(key, TOP_LEVEL)}")
