@@ -2,7 +2,7 @@
 
 :func:`cycle_figures` gives the global figures of one load cycle (area fractions over the
 nominal contact area, stick margin, wear, dissipation); :func:`wear_figures` the worn volume
-and the deepest wear, each body's own in finite sliding; :func:`active_slip_area_fraction` the
+and the deepest wear, with each body's own field in finite sliding; :func:`active_slip_area_fraction` the
 area that still slides in the sense of the verdict; :func:`loosening_evident` whether the clamp
 force keeps falling while the stick area shrinks; :func:`verdict` the engineer's answer
 (``stick``, ``partial_slip``, ``damage`` or ``loosening``; :data:`VERDICT_MEANINGS`). :class:`Ending` is why a run stopped. Pure functions of
@@ -93,17 +93,21 @@ def wear_figures(area: np.ndarray, state: ContactState, master_wear: np.ndarray 
     two bodies' depths at one point added. Finite sliding: each body's depth lives on its own
     surface (SPEC §4), and the master's scar reaches beyond the points' current partners. The
     volume is then the slave's depth × the points' areas plus the master's own field ×
-    ``master_area`` (its nodes' areas), and the depth the deepest of the two bodies' own
-    fields, each body's alone: the two scars no longer lie on top of each other.
+    ``master_area`` (its nodes' areas). The depth is the deepest material removed at one
+    place: the deepest gap (where the two scars lie on top of each other, at the points'
+    current partners, their depths add) or the deepest of either body's own field, whichever
+    is deeper. A short stroke gives small sliding's figure; a stroke longer than the contact
+    leaves the master's scar deepest where the slave no longer is.
     """
     if state.wear_depth is None:
         return {"max_wear_depth_mm": 0.0, "wear_volume_mm3": 0.0}
+    gap = state.gap
     if master_wear is None:
-        gap = state.gap
         return {"max_wear_depth_mm": float(np.max(gap, initial=0.0)),
                 "wear_volume_mm3": float(np.sum(np.asarray(gap) * area))}
     slave = state.wear_depth[0]
-    return {"max_wear_depth_mm": float(max(np.max(slave, initial=0.0), np.max(master_wear, initial=0.0))),
+    deepest = max(np.max(gap, initial=0.0), np.max(slave, initial=0.0), np.max(master_wear, initial=0.0))
+    return {"max_wear_depth_mm": float(deepest),
             "wear_volume_mm3": float(np.sum(slave * area) + np.sum(master_wear * master_area))}
 
 

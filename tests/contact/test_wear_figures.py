@@ -44,13 +44,16 @@ def test_fixed_pairing_counts_the_gap_at_the_points():
 
 
 def test_own_surfaces_count_each_body_alone():
-    """Finite sliding: the master's own field on its own nodes, not its depth at the partners."""
+    """Finite sliding: the master's own field on its own nodes, not its depth at the partners;
+    the deepest wear where the scars overlap (the gap) or in either body's own field."""
     area = np.array([0.1, 0.2, 0.1])
-    state = _state([1e-4, 2e-4, 0.0], [3e-4, 1e-4, 1e-4])
+    state = _state([1e-4, 2e-4, 0.0], [3e-5, 1e-5, 1e-5])
     master_wear, master_area = np.array([0.0, 5e-5, 1.5e-4, 5e-5]), np.array([0.1, 0.1, 0.1, 0.1])
     figures = wear_figures(area, state, master_wear, master_area)
     assert figures["wear_volume_mm3"] == pytest.approx(0.1 * 1e-4 + 0.2 * 2e-4 + 0.1 * 2.5e-4, rel=1e-12)
-    assert figures["max_wear_depth_mm"] == pytest.approx(2e-4, rel=1e-12)  # the slave's: deeper than the master's
+    assert figures["max_wear_depth_mm"] == pytest.approx(2.1e-4, rel=1e-12)  # overlapping at point 1
+    left_behind = np.array([0.0, 5e-5, 3e-4, 5e-5])  # the master's scar where no point is now
+    assert wear_figures(area, state, left_behind, master_area)["max_wear_depth_mm"] == 3e-4
 
 
 def test_no_wear_no_figures():
@@ -92,10 +95,10 @@ def test_run_figures_are_the_bodies_own_wear(long_stroke):
     state, master = result.state, solver.pairing.master
     cylinder = float(np.sum(state.wear_depth[0] * solver.area))
     flat = float(np.sum(state.master_wear * master.area))
+    deepest = max(state.gap.max(), state.wear_depth[0].max(), state.master_wear.max())
     for figures in (result.figures, result.cycles[-1].figures):
         assert figures["wear_volume_mm3"] == pytest.approx(cylinder + flat, rel=1e-12)
-        assert figures["max_wear_depth_mm"] == max(state.wear_depth[0].max(), state.master_wear.max())
-    assert result.figures["max_wear_depth_mm"] == state.master_wear.max()  # w_flat = 3 w_cylinder
+        assert figures["max_wear_depth_mm"] == deepest
     # what the points see of the flat (its depth at their partners) misses the scar they left
     at_points = float(np.sum(state.gap * solver.area))
     assert at_points < 0.97 * result.figures["wear_volume_mm3"]
