@@ -171,7 +171,7 @@ class ContactSolver:
         self.h0 = structure.initial_overclosure
         self.stiffness_scale = space.stiffness_scale  # N/mm
         self.rigid_modes = _rigid_modes(space, self.stiffness_scale)
-        self._last_failure = None  # (response, r_ctl, force scale, loaded) of the last failed attempt
+        self._last_failure = None  # (response, r_ctl, force scale, loaded, f_q) of the last failed attempt
         self._last_compliance = None  # (λ, W·λ) of the last residual
         self._solved_at: dict[tuple, tuple] = {}  # the last equilibria at each load step and level (cyclic predictors)
         # S_q without the round-off stiffness (~1e-8 N/mm) of the rigid modes: left in, it
@@ -338,7 +338,7 @@ class ContactSolver:
         searching = unpressed
         if searching:
             penetration = self.h0 + g.reshape(self.n_points, self.dim)[:, 0] - state.gap
-            nearest = penetration >= penetration.max() - 1e-9
+            nearest = self._search_points(penetration)
             kn = np.broadcast_to(self.law.normal_stiffness, penetration.shape)
             penalty = kn[nearest] * self.area[nearest]
             blocks[nearest] = penalty[:, None, None] * np.eye(self.dim)
@@ -349,6 +349,33 @@ class ContactSolver:
         # iteration, a residual and a solve, for every three decades left).
         final = settled or np.max(np.abs(r_kin), initial=0.0) <= 1e3 * self.settings.displacement_tolerance
         return (*self.linear.solve(blocks, r_kin, r_ctl, final), searching)
+
+    def _search_points(self, penetration: np.ndarray) -> np.ndarray:
+        """The points a contact-search step gives the penalty stiffness (mask, n_points): those
+        nearest to contact (within 1e-9 mm of the nearest), and then the next nearest in
+        turn until together they hold every rigid mode the whole interface holds.
+
+        One point, or one line of points, does not hold a body in 3D: the body is free to
+        turn about it, the search step is singular along that turn, and its Newton step is
+        round-off (10⁸ mm). Flat faces that start just touching have every point nearest;
+        but a body load that bends the loose body away from the joint (a counterweight's
+        centrifugal load, ramped in with the bolt pretension) opens them unevenly in the
+        drive-following predictor, one point is left nearest, and every cut-back sub-step
+        scales the bending without changing which point that is."""
+        nearest = penetration >= penetration.max() - 1e-9
+        modes = self.rigid_modes.shape[1]
+        images = (self.space.E @ self.rigid_modes).reshape(self.n_points, self.dim, modes)
+        order = np.argsort(-penetration, kind="stable")
+        held = np.cumsum(np.einsum("pdi,pdj->pij", images[order], images[order]), axis=0)
+        # the rank of the modes' images on the first k points, k = 1 … n (Gram eigenvalues)
+        eigenvalues = np.linalg.eigvalsh(held)
+        ranks = np.sum(eigenvalues > 1e-12 * eigenvalues[-1, -1], axis=1)
+        enough = int(np.argmax(ranks == ranks[-1])) + 1
+        if enough <= nearest.sum():
+            return nearest
+        chosen = np.zeros(self.n_points, dtype=bool)
+        chosen[order[:enough]] = True
+        return chosen
 
     def _first_kink(self, g, delta_g, state: ContactState, reference) -> float:
         """Fraction of the step g → g + Δg at which the first point opens, closes or crosses
@@ -544,15 +571,21 @@ class ContactSolver:
                 self._remember(key, solved, state)
                 return solved, response
         stats.iterations += self.settings.max_iterations
-        self._last_failure = (response, r_ctl, force_scale, loaded)
+        self._last_failure = (response, r_ctl, force_scale, loaded, f_q)
         return None
 
     def _failure_reason(self) -> tuple[str, str]:
         """Why the last attempt failed: (cause, words), the cause "slid_off" for lost tangential
-        equilibrium, else "diverged" (see :class:`ConvergenceError`)."""
+        equilibrium, else "diverged" (see :class:`ConvergenceError`).
+
+        Every closed point sliding in the failed iterate is not enough to say that the load
+        exceeds what friction can carry: a Newton iteration thrown off by a bad step also ends
+        there, with whatever pressures it reached. So it is said only when friction at the
+        iterate's own pressures could not carry the load even when sliding everywhere
+        (:meth:`_friction_needed`)."""
         generic = ("diverged", "Newton did not converge (the step may be too large for the contact "
                    "status changes; try more increments)")
-        response, r_ctl, force_scale, loaded = self._last_failure
+        response, r_ctl, force_scale, loaded, f_q = self._last_failure
         if loaded and not np.any(response.pressure > 0.0):
             return ("diverged", "no point of the interface stays pressed: the load pulls the body off "
                     "the contact, and a body held only by the contact has no equilibrium then "
@@ -563,11 +596,49 @@ class ContactSolver:
         if np.linalg.norm(self.rigid_modes.T @ r_ctl) <= self.settings.force_tolerance * force_scale:
             return generic
         capacity = float(np.sum(np.linalg.norm(response.shear, axis=1) * self.area))
+        needed = self._friction_needed(response, f_q)
+        if needed is None:
+            return generic
+        if needed < 1.0 - 1e-3:
+            return ("diverged", f"Newton did not converge: every closed point slid in the failed iterate, "
+                    f"but friction at its pressures could carry the load with {100.0 * needed:.3g} % of "
+                    f"its capacity ({capacity:.6g} N), so this is no loss of tangential equilibrium "
+                    "(the step may be too large for the contact status changes; try more increments)")
         return ("slid_off", f"tangential equilibrium is lost: all {int(closed.sum())} closed contact points "
                 f"slide at |τ| = μ·p (friction capacity {capacity:.6g} N) and the force-controlled DOFs "
                 "cannot be balanced; the applied load exceeds what friction can carry, so no "
                 "static solution exists (prescribe a motion instead of a force to drive the "
                 "interface into gross slip)")
+
+    def _friction_needed(self, response: Response, f_q: np.ndarray) -> float | None:
+        """The least share of its capacity μ·p·A at which friction balances the load along the
+        rigid modes, the pressures being those of ``response`` (every closed point sliding):
+        below 1, shear forces within the friction limit balance the load, so a static solution
+        is not ruled out. None where the pressures leave out of balance what friction cannot
+        act on: the iterate is no normal equilibrium either, so it tells nothing of friction.
+
+        The shear is the one of least Σ|A·τ|²/(μ·p·A) (a weighted least-norm solution),
+        whose share is exact for a load along one translation (each point then carries
+        the same share) and above the least possible one otherwise."""
+        closed = response.status != Status.OPEN
+        modes = self.rigid_modes
+        images = (self.space.E @ modes).reshape(self.n_points, self.dim, modes.shape[1])[closed]
+        load = modes.T @ f_q
+        normal = images[:, 0, :].T @ (self.area[closed] * response.pressure[closed])
+        demand = -load - normal  # what the shear forces must carry: E·modes carries λ to the modes
+        shear = images[:, 1:, :].reshape(-1, modes.shape[1]).T
+        tolerance = 1e-3 * (np.linalg.norm(load) + np.linalg.norm(normal))
+        reach = shear @ np.linalg.lstsq(shear, demand, rcond=1e-12)[0]
+        if np.linalg.norm(demand - reach) > tolerance:
+            return None
+        capacity = np.linalg.norm(response.shear[closed], axis=1) * self.area[closed]
+        weights = np.repeat(capacity, self.dim - 1)
+        forces = weights * (shear.T @ np.linalg.lstsq((shear * weights) @ shear.T, demand, rcond=1e-12)[0])
+        if np.linalg.norm(demand - shear @ forces) > tolerance:  # no capacity where it is needed (μ = 0)
+            return np.inf
+        with np.errstate(divide="ignore", invalid="ignore"):
+            share = np.linalg.norm(forces.reshape(-1, self.dim - 1), axis=1) / capacity
+        return float(np.max(np.nan_to_num(share, nan=0.0, posinf=np.inf), initial=0.0))
 
     def increment(self, start: Equilibrium, state: ContactState, amplitudes: np.ndarray,
                   effects: Effects, position: tuple[int, int] | None = None
