@@ -214,6 +214,11 @@ def _revolution_synthesis(loading, signals, phases):
     """(synthesise(name, scale), reference amplitude, frequency) over the last whole revolution."""
     start = loading.time[-1] - loading.revolution_period
     if start < loading.time[0] - 1e-12:
+        if loading.revolutions is None:  # histories read from a file
+            raise InputError(f"'coupling.cycle' = 'revolution' needs one whole revolution of history "
+                             f"({loading.revolution_period:.4g} s at {loading.speed_rpm:g} rpm); the interface-"
+                             f"histories file spans {loading.time[-1] - loading.time[0]:.4g} s: give a longer "
+                             "file, or use 'coupling.cycle' = 'wing_period'")
         raise InputError("'coupling.cycle' = 'revolution' needs the steady half of the multibody run to "
                          "last one revolution: raise [mbs.solver] revolutions to at least 2")
     window = loading.time >= start

@@ -510,7 +510,8 @@ def attach_negative_values(argv: list[str], options: set[str]) -> list[str]:
 #: page `fretwork report` writes there by default: it would describe the earlier run).
 OUTPUTS = {
     "run": ("results.h5", "results.h5.part", "checkpoint.h5", "checkpoint.h5.tmp", "plots", "interface.xdmf",
-            "interface.h5", "interface_final.vtu", "report.html"),
+            "interface.h5", "interface_final.vtu", "interface_master_final.vtu", "interface_increments.xdmf",
+            "interface_increments.h5", "report.html"),
     "limit": ("limit.png", "limit.json", "runs", "report.html"),
     "demo": ("operating", "limit", "sweep.h5", "margins.png", "summary.json", "report.html"),
     "sweep": ("sweep.h5", "sweep.h5.part", "sweep_wing_amplitude.png", "campbell.png", "margins.png", "limit_runs",

@@ -21,6 +21,7 @@ from pipelines.output.paraview import (
     write_final_vtu,
     write_increment_series,
     write_interface_series,
+    write_master_final_vtu,
 )
 from pipelines.output.plots import plot_results
 from pipelines.output.results import ResultsWriter
@@ -187,6 +188,7 @@ def _write_outputs(path: Path, out_dir: Path, plots: bool, increments: bool) -> 
     written = plot_results(path, out_dir / "plots") if plots else []
     write_interface_series(path, out_dir / "interface.xdmf")
     write_final_vtu(path, out_dir / "interface_final.vtu")
+    write_master_final_vtu(path, out_dir / "interface_master_final.vtu")  # finite sliding only
     if increments:
         write_increment_series(path, out_dir / "interface_increments.xdmf")
     return written

@@ -276,3 +276,16 @@ def test_a_stated_amplitude_for_histories_without_vibration_is_refused_naming_th
     for amplitude in (None, 0.1):
         with pytest.raises(InputError, match=r"switch on an excitation in \[mbs\] effects"):
             cycle_loading(in_process, "wing_period", amplitude, 8)
+
+
+def test_a_revolution_cycle_on_a_file_shorter_than_a_revolution_names_the_file_not_the_solver(tmp_path):
+    from mbs.loading import cycle_loading
+
+    loading = _constant_loading(tmp_path, lambda time: 1e-3 * np.sin(2 * np.pi * 375.0 * time))  # 0.085 s, > 0.08 s
+    cycle_loading(loading, "revolution", None, 8)
+    short = replace(loading, time=loading.time[:800], wing_torsion=loading.wing_torsion[:800])  # 0.04 s
+    with pytest.raises(InputError, match=r"needs one whole revolution of history \(0.08 s at 750 rpm\); the "
+                                         r"interface-histories file spans 0.03995 s"):
+        cycle_loading(short, "revolution", None, 8)
+    with pytest.raises(InputError, match=r"raise \[mbs.solver\] revolutions"):  # a multibody run's advice
+        cycle_loading(replace(short, revolutions=1.0), "revolution", None, 8)
