@@ -29,6 +29,7 @@ Workers are started with the spawn method: a script (not the ``fretwork`` comman
 from __future__ import annotations
 
 import logging
+import os
 import re
 import signal
 import sys
@@ -180,7 +181,7 @@ def _local_cluster(workers: int | None, retries: int, n_cases: int | None = None
     with dask.config.set(settings):  # for the cluster's whole life: a worker that died is started anew
         with _workers_ignore_ctrl_c():
             local = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                                 scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.CRITICAL,
+                                 scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=_cluster_log_level(),
                                  memory_limit=0)
         with local:
             from distributed import Client
@@ -191,6 +192,13 @@ def _local_cluster(workers: int | None, retries: int, n_cases: int | None = None
             with Client(local, set_as_default=False) as client:
                 client.register_plugin(IgnoreCtrlC())
             yield local
+
+
+def _cluster_log_level() -> int:
+    """The level of the local cluster's own log lines on stderr: CRITICAL (none), or WARNING with
+    ``FRETWORK_DASK_LOGS`` set, to see a worker that died and was started anew ("Restarting
+    worker"), which a user otherwise sees only as its case run again."""
+    return logging.WARNING if os.environ.get("FRETWORK_DASK_LOGS") else logging.CRITICAL
 
 
 @contextmanager

@@ -175,3 +175,14 @@ def assert_same(ours, theirs, where="record"):
         assert ours == theirs or (math.isnan(ours) and math.isnan(theirs)), f"{where}: {ours!r} != {theirs!r}"
     else:
         assert ours == theirs, where
+
+
+def test_the_cluster_logs_are_silenced_unless_asked_for(monkeypatch):
+    import logging
+
+    from pipelines.parallel import _cluster_log_level
+
+    monkeypatch.delenv("FRETWORK_DASK_LOGS", raising=False)
+    assert _cluster_log_level() == logging.CRITICAL
+    monkeypatch.setenv("FRETWORK_DASK_LOGS", "1")
+    assert _cluster_log_level() == logging.WARNING
