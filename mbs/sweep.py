@@ -91,7 +91,8 @@ def _evaluate(run, shaft_speed: float):
 class SpeedCase:
     """What one speed gave: wing amplitude (number of CWs,) mm, dominant frequencies and orders
     (N_DOMINANT,) Hz and orders, real-time factor, system eigenfrequencies (<= N_SYSTEM_MODES,) Hz;
-    failure: the integration's message when it failed (then only the eigenfrequencies are set)."""
+    failure: the integration's message when it failed (then only the eigenfrequencies are set);
+    unsettled_change: how far the run was from steady (:func:`mbs.histories.unsettled_change`)."""
 
     system_frequencies: np.ndarray
     wing_amplitude: np.ndarray | None = None
@@ -100,7 +101,6 @@ class SpeedCase:
     real_time_factor: float = np.nan
     failure: str | None = None
     unsettled_change: float | None = None
-    revolutions: float | None = None
 
 
 def run_speed(params: ModelParams, reduced, reduced_throw) -> SpeedCase:
@@ -113,7 +113,7 @@ def run_speed(params: ModelParams, reduced, reduced_throw) -> SpeedCase:
         return SpeedCase(eigen, failure=str(error))
     amplitude, frequencies, orders = _evaluate(run, params.shaft_speed)
     return SpeedCase(eigen, amplitude, frequencies, orders, run.real_time_factor,
-                     unsettled_change=run.unsettled_change, revolutions=float(params.solver.revolutions))
+                     unsettled_change=run.unsettled_change)
 
 
 def collect_sweep(model_params: ModelParams, speeds: np.ndarray, cases: list, reduced) -> SweepResult:
@@ -139,10 +139,9 @@ def collect_sweep(model_params: ModelParams, speeds: np.ndarray, cases: list, re
         real_time[i] = case.real_time_factor
         if case.unsettled_change is not None:
             change[i] = case.unsettled_change
-        if case.revolutions is not None:
-            message = unsettled_message(case.unsettled_change, case.revolutions, float(speed))
-            if message is not None:
-                unsettled[float(speed)] = message
+        message = unsettled_message(case.unsettled_change, model_params.solver.revolutions, float(speed))
+        if message is not None:
+            unsettled[float(speed)] = message
     active_orders = excitation_orders(model_params.excitation, model_params.effects)
     campbell = campbell_diagram(reduced, speeds, active_orders, system_frequencies=system)
     crossings = campbell.system_crossings if n > 1 else []
