@@ -169,7 +169,7 @@ def _local_cluster(workers: int | None, retries: int, n_cases: int | None = None
     # case re-run until it counts as failed; one large contact case may use most of the machine.
     # The scheduler serves its health page even without a dashboard: on a free local port, not
     # on 8787 (taken by any other cluster on the machine, with a warning).
-    # silence_logs=CRITICAL: a worker's own ERROR lines are about the cluster, not the cases (a
+    # silence_logs above CRITICAL: a worker's own ERROR lines are about the cluster, not the cases (a
     # case's error comes back as its outcome, a dead worker as a retried case): when Ctrl-C
     # closes the scheduler, a worker still heart-beating printed "Failed to communicate with
     # scheduler during heartbeat" with a traceback before the cluster ended it.
@@ -195,10 +195,12 @@ def _local_cluster(workers: int | None, retries: int, n_cases: int | None = None
 
 
 def _cluster_log_level() -> int:
-    """The level of the local cluster's own log lines on stderr: CRITICAL (none), or WARNING with
-    ``FRETWORK_DASK_LOGS`` set, to see a worker that died and was started anew ("Restarting
-    worker"), which a user otherwise sees only as its case run again."""
-    return logging.WARNING if os.environ.get("FRETWORK_DASK_LOGS") else logging.CRITICAL
+    """The level of the local cluster's own log lines on stderr: above CRITICAL (none), or WARNING
+    with ``FRETWORK_DASK_LOGS`` set, to see a worker that died and was started anew ("Restarting
+    worker"), which a user otherwise sees only as its case run again. Not CRITICAL itself: when
+    Ctrl-C closes the client of a long search, the scheduler logs each case that still finishes
+    at CRITICAL ("Closed comm ... while trying to write key-in-memory", with a traceback)."""
+    return logging.WARNING if os.environ.get("FRETWORK_DASK_LOGS") else logging.CRITICAL + 1
 
 
 @contextmanager

@@ -183,6 +183,6 @@ def test_the_cluster_logs_are_silenced_unless_asked_for(monkeypatch):
     from pipelines.parallel import _cluster_log_level
 
     monkeypatch.delenv("FRETWORK_DASK_LOGS", raising=False)
-    assert _cluster_log_level() == logging.CRITICAL
+    assert _cluster_log_level() > logging.CRITICAL  # the scheduler's CRITICAL lines at a Ctrl-C too
     monkeypatch.setenv("FRETWORK_DASK_LOGS", "1")
     assert _cluster_log_level() == logging.WARNING
