@@ -24,6 +24,7 @@ from reduction.mesh import generators as meshes
 from pipelines.scene import Scene
 from pipelines.scene.checks import mesh_unit_problem
 from pipelines.stages import StageCache
+from pipelines.support import check_support
 from reduction.body_loads import centrifugal, gravity
 from reduction.elasticity import assemble_elastic_body
 from reduction.errors import InputError
@@ -167,21 +168,23 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
     kept (None: always computed); multibody: its result when the caller already has it.
     """
     data = scene.data
-    coupled_body = data.get("coupling", {}).get("body")
-    loading = (multibody or multibody_loading(scene, cache)) if coupled_body else None
-    pattern_names, condensers = (), {}
     bodies, built_meshes, named_sets = [], {}, {}
     for name, spec in data["bodies"].items():
         mesh, named_sets[name] = _body_mesh(scene, name, spec, (meshes_override or {}).get(name))
         built_meshes[name] = mesh
-        body = _body(scene, name, spec, mesh, named_sets[name])
-        if name == coupled_body:
-            inertia, condenser = coupled_patterns(scene, body, mesh, loading)
-            body = replace(body, body_loads={**body.body_loads, **inertia})
+        bodies.append(_body(scene, name, spec, mesh, named_sets[name]))
+    motions = _control_patterns(scene, "motions")
+    check_support(scene, bodies, motions)  # before the multibody stage and the condensation
+    coupled_body = data.get("coupling", {}).get("body")
+    loading = (multibody or multibody_loading(scene, cache)) if coupled_body else None
+    pattern_names, condensers = (), {}
+    for k, body in enumerate(bodies):
+        if body.name == coupled_body:
+            inertia, condenser = coupled_patterns(scene, body, built_meshes[body.name], loading)
+            bodies[k] = replace(body, body_loads={**body.body_loads, **inertia})
             if condenser is not None:
-                condensers[name] = condenser
+                condensers[body.name] = condenser
             pattern_names = tuple(inertia)
-        bodies.append(body)
     contact = data["contact"]
     slave, master = ((contact[role]["body"], select_facets(built_meshes[contact[role]["body"]], contact[role],
                                                            f"contact.{role}", named_sets[contact[role]["body"]]))
@@ -193,7 +196,7 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
     n_points = surface_from_facets(slave_body.elastic.mesh, slave[1], "contact.slave").nodes.size
     path, reason = decide_path(contact.get("solver", "auto"), n_points, scene.dimension)
     assembly = assemble(bodies, slave, master, loads=_control_patterns(scene, "loads"),
-                        motions=_control_patterns(scene, "motions"),
+                        motions=motions,
                         search_distance=contact.get("search_distance", np.inf), bolts=bolts,
                         pairing=contact.get("pairing", "auto"), condensers=condensers,
                         keep_interior=path == "sparse")

@@ -283,7 +283,7 @@ def _bolt_axis_problems(name, bolt, axis, head, nut, dim) -> list[str]:
             "the axis must point from the head to the nut"]
 
 
-def _held_groups(data) -> list[list[str]]:
+def held_groups(data) -> list[list[str]]:
     """The bodies in groups joined by the contact or a bolt, each group a list of names."""
     bodies, contact = list(data["bodies"]), data["contact"]
     group = {name: {name} for name in bodies}
@@ -305,11 +305,13 @@ def _held_groups(data) -> list[list[str]]:
 def _check_support(data, problems):
     """Every group of bodies (joined by the contact or bolts) is held against rigid-body motion: one
     of its bodies has a fixed selection, or [[motions]] prescribe each translation of the group.
-    Necessary, not sufficient (a support of one component leaves the others free)."""
+    Necessary, not sufficient (a support of one component leaves the others free): run before any
+    mesh is built, it gives the earlier message; :mod:`pipelines.support` checks every rigid mode
+    once the selections are resolved to DOFs."""
     translations = ("ux", "uy", "uz")[:data["scene"]["dimension"]]
     motions = [str(entry.get("dof", "")).split(".") for entry in data.get("motions", [])
                if isinstance(entry, dict)] if isinstance(data.get("motions", []), list) else []
-    for members in _held_groups(data):
+    for members in held_groups(data):
         if any(data["bodies"][name].get("fixed") for name in members):
             continue
         driven = {dof[-1] for dof in motions if len(dof) == 3 and dof[0] in members}
