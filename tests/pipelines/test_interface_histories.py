@@ -78,8 +78,9 @@ def _constant_histories(folder: Path, name: str, wing_torsion_mm: float) -> str:
 
 def test_a_static_check_from_a_file_is_the_constant_load_run(tmp_path):
     """Zero wing torsion and no stated amplitude: the load cycle is the histories' means. Its clamp
-    force is that of the same loads with a 1e-6 mm wing vibration (QA: stick, 803,385.5 N), to
-    what 1e-6 mm of a bolt's stretch carries (8e5 N/mm: 0.8 N)."""
+    force is that of the same loads with a 1e-6 mm wing vibration (stick, 806,222.6 N on the
+    shipped C3D10 meshes; QA found 803,385.5 N on the C3D4 meshes shipped before), to what 1e-6 mm
+    of a bolt's stretch carries (8e5 N/mm: 0.8 N)."""
     joint = (EXAMPLES / "user_joint.toml").read_text().replace('"user_joint/', f'"{EXAMPLES / "user_joint"}/')
     joint = "\n".join(line for line in joint.splitlines() if not line.startswith("wing_amplitude"))
     joint = joint.replace(', "flexible_counterweight", "gas_torque", "gear_mesh"]', "]")
@@ -94,4 +95,4 @@ def test_a_static_check_from_a_file_is_the_constant_load_run(tmp_path):
     assert tiny["wing_amplitude_mm"] == pytest.approx(1e-6, rel=1e-3)
     assert static["verdict"] == tiny["verdict"] == "stick"
     assert static["clamp_force_N"] == pytest.approx(tiny["clamp_force_N"], abs=8e5 * 1e-6)
-    assert static["clamp_force_N"] == pytest.approx(803385.5, abs=8e5 * 1e-6)
+    assert static["clamp_force_N"] == pytest.approx(806222.6, abs=8e5 * 1e-6)
