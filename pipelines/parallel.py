@@ -205,21 +205,36 @@ def _cluster_log_level() -> int:
 
 @contextmanager
 def _workers_ignore_ctrl_c() -> Iterator[None]:
-    """Processes started in the block ignore SIGINT.
+    """Processes started in the block ignore SIGINT, and so do those that threads started in
+    the block start later.
 
     Ctrl-C reaches every process of the terminal's process group: a worker that took it would
     die in the middle of its case, with a traceback and leaked semaphores. The workers inherit
     the ignored signal (it survives their exec); the client alone is interrupted and closes the
-    cluster, which ends the workers. A Ctrl-C while the cluster starts (the block) is ignored; a
-    worker started anew after its process died does not inherit it
-    (:class:`pipelines.worker_signals.IgnoreCtrlC`)."""
+    cluster, which ends the workers. A Ctrl-C while the cluster starts (the block) is ignored.
+
+    A worker started anew after its process died does not inherit the ignored signal: the
+    nanny starts it from a thread, after the block. That thread descends from the cluster's
+    event-loop thread, started in the block, and a thread inherits its creator's signal mask:
+    SIGINT is blocked in the main thread during the block (unblocked after), so the loop thread
+    and its descendants keep it blocked, and a process one of them starts is born with it
+    blocked (a mask survives fork and exec). Without that, a Ctrl-C while a restarted worker was
+    still importing printed its KeyboardInterrupt traceback; once it has joined,
+    :class:`pipelines.worker_signals.IgnoreCtrlC` ignores the signal outright. The
+    multiprocessing resource tracker is started first: starting it unblocks SIGINT in the thread
+    that starts it (``resource_tracker.ensure_running``), which would be the loop thread."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
         signal.signal(signal.SIGINT, previous)
 
 
