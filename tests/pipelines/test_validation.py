@@ -1,12 +1,14 @@
 """``fretwork validate --quick``: the cylinder-on-plane case against closed forms, in CI.
 
 The tolerances are pinned here, not read from ``pipelines/validate.py``: loosening one there
-must fail this test and show in review.
+must fail this test and show in review. The mortar patch test and the finite-sliding check
+are also run as they must not pass: node-to-segment pairing on the same meshes, and the
+pairing held fixed (small sliding) in the same gross slip.
 """
 
 import pytest
 
-from pipelines.jobs.validate import run_validation
+from pipelines.jobs.validate import SCENE, check_finite_sliding, check_mortar_patch, run_validation
 
 #: (case, start of the quantity's name) → relative tolerance of the check.
 PINNED = {
@@ -27,6 +29,13 @@ PINNED = {
     ("cylinder_on_plane/slip", "slip amplitude at the centre"): 0.03,
     ("cylinder_on_plane/wear_geometry", "max wear depth"): 0.05,
     ("cylinder_on_plane/wear_geometry", "scar width"): 0.05,
+    ("flat_blocks/mortar_patch", "pressure, worst point, 2D 0.4 on 0.3 mm"): 1e-5,
+    ("flat_blocks/mortar_patch", "pressure, worst point, 2D 0.3 on 0.4 mm"): 1e-5,
+    ("flat_blocks/mortar_patch", "pressure, worst point, 3D 7x7 on 10x10"): 1e-5,
+    ("flat_blocks/mortar_patch", "pressure, worst point, 3D 10x10 on 7x7"): 1e-5,
+    ("cylinder_on_plane/finite_sliding", "cylinder scar width vs 2a"): 0.04,
+    ("cylinder_on_plane/finite_sliding", "flat scar width vs cylinder's + 2 x stroke"): 0.015,
+    ("cylinder_on_plane/finite_sliding", "worn area / (w x global dissipation)"): 0.005,
 }
 
 
@@ -59,3 +68,21 @@ def test_validation_case_passes(records, case):
         assert r["rel_error"] <= tolerance, \
             f"{r['quantity']}: {r['value']:.6g} vs {r['reference']:.6g} (tol {tolerance})"
         assert r["passed"], f"{r['quantity']}: failed its own check (regime or tolerance)"
+
+
+def test_node_to_segment_pairing_fails_the_patch_test():
+    """The same non-matching faces paired node-to-segment: pressures scatter by 8-47 %, four
+    orders of magnitude beyond the tolerance the mortar pairing meets."""
+    records = check_mortar_patch(SCENE, {}, pairing="node_to_segment")
+    assert len(records) == 4
+    for r in records:
+        assert not r["passed"] and r["rel_error"] > 0.05, r
+
+
+def test_small_sliding_fails_the_finite_sliding_check(tmp_path):
+    """With the pairing fixed the flat's wear stays where the cylinder's points started: its
+    scar is the cylinder's, short of the cylinder's + 2δ by about 1 mm."""
+    records = {r["quantity"]: r for r in check_finite_sliding(SCENE, {}, cycles=1, increments=80, out_dir=tmp_path,
+                                                              mode="small")}
+    flat = records["flat scar width vs cylinder's + 2 x stroke [mm]"]
+    assert not flat["passed"] and flat["reference"] - flat["value"] > 0.8, flat
