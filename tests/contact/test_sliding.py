@@ -24,6 +24,7 @@ from pipelines import scene as scenes
 from pipelines.build import build
 from pipelines.output.checkpoint import _read_state, _write_state
 from pipelines.jobs.run import run_scene
+from pipelines.jobs.validate import _worn_width  # the scar width `fretwork validate` measures too
 from reduction.threads import single_threaded_blas
 
 SCENE = str(Path(__file__).resolve().parents[2] / "examples" / "gross_slip_fretting.toml")
@@ -45,12 +46,6 @@ def _run(mode, overrides=None):
     result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
                            cof_evolution=False, wear=True, observer=MeterObserver(meter))
     return model, solver, result, meter.global_dissipation
-
-
-def _worn_width(x, depth):
-    """Distance between the outermost nodes worn deeper than 0.1 % of the deepest, mm."""
-    worn = x[depth > 1e-3 * depth.max()]
-    return float(worn.max() - worn.min())
 
 
 def _stroke(model, result):
