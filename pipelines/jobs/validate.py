@@ -275,7 +275,7 @@ def check_mortar_patch(scene_path, overrides, pairing="mortar") -> list[dict]:
 SLIDING_ELEMENT = 0.1
 
 
-def _worn_width(x, depth) -> float:
+def worn_width(x, depth) -> float:
     """Distance between the outermost nodes worn deeper than 0.1 % of the deepest, mm."""
     worn = x[depth > 1e-3 * depth.max()]
     return float(worn.max() - worn.min())
@@ -300,7 +300,7 @@ def check_finite_sliding(scene_path, overrides, cycles, increments, out_dir: Pat
         x_flat, flat_depth = x_cylinder, result.state.wear_depth[1]
     else:
         x_flat, flat_depth = pairing.master.coordinates[:, 0], result.state.master_wear
-    cylinder, flat = _worn_width(x_cylinder, cylinder_depth), _worn_width(x_flat, flat_depth)
+    cylinder, flat = worn_width(x_cylinder, cylinder_depth), worn_width(x_flat, flat_depth)
     centre = np.argmin(np.abs(x_cylinder))
     stroke = 0.5 * float(result.cycles[-1].slip_range[centre]) + model.law.critical_slip  # irreversible + elastic
     worn = sum(worn_volumes(solver.pairing, result.state))

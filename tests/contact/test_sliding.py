@@ -24,7 +24,7 @@ from pipelines import scene as scenes
 from pipelines.build import build
 from pipelines.output.checkpoint import _read_state, _write_state
 from pipelines.jobs.run import run_scene
-from pipelines.jobs.validate import _worn_width  # the scar width `fretwork validate` measures too
+from pipelines.jobs.validate import worn_width  # the scar width `fretwork validate` measures too
 from reduction.threads import single_threaded_blas
 
 SCENE = str(Path(__file__).resolve().parents[2] / "examples" / "gross_slip_fretting.toml")
@@ -62,8 +62,8 @@ def finite():
 def test_gross_slip_scar_of_the_flat_is_wider_by_twice_the_stroke(finite):
     model, solver, result, _ = finite
     pairing = model.assembly.pairing
-    cylinder = _worn_width(pairing.slave.coordinates[:, 0], result.state.wear_depth[0])
-    flat = _worn_width(pairing.master.coordinates[:, 0], result.state.master_wear)
+    cylinder = worn_width(pairing.slave.coordinates[:, 0], result.state.wear_depth[0])
+    flat = worn_width(pairing.master.coordinates[:, 0], result.state.master_wear)
     stroke = _stroke(model, result)
     assert 0.4 < stroke < 0.6  # comparable to the contact half-width a = 1.28 mm
     assert cylinder == pytest.approx(2 * 1.2833, abs=2 * ELEMENT)
@@ -75,7 +75,7 @@ def test_small_sliding_cannot_widen_the_flat_scar():
     """With the pairing fixed, the flat's wear stays where the cylinder's points started."""
     model, _, result, _ = _run("small", {"procedure.wear_cycles": 1})
     x = model.assembly.pairing.slave.coordinates[:, 0]
-    widths = [_worn_width(x, depth) for depth in result.state.wear_depth]
+    widths = [worn_width(x, depth) for depth in result.state.wear_depth]
     assert widths[1] == pytest.approx(widths[0], abs=1e-9)
     assert widths[1] < widths[0] + 2 * _stroke(model, result) - 5 * ELEMENT
 
