@@ -18,6 +18,7 @@ from pipelines import scene as scenes
 from pipelines.jobs.run import run_scene
 from pipelines.output import plots
 from pipelines.output.paraview import write_master_final_vtu
+from pipelines.jobs.validate import worn_width
 from reduction.threads import single_threaded_blas
 
 SCENE = str(Path(__file__).resolve().parents[2] / "examples" / "gross_slip_fretting.toml")
@@ -28,11 +29,6 @@ def _run(folder, sliding):
     scene = scenes.load(SCENE, {"contact.sliding": sliding, "motions": LONG_STROKE, "procedure.wear_cycles": 1})
     with single_threaded_blas():
         return run_scene(scene, folder, progress=False, plots=False)
-
-
-def _worn_width(x, depth):
-    worn = x[depth > 1e-3 * depth.max()]
-    return float(worn.max() - worn.min())
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +55,7 @@ def test_results_file_holds_the_master_wear_on_its_own_surface(finite):
         assert figures["max_wear_depth_mm"] == max(gap.max(), slave.max(), depth[()].max())
         assert flat / cylinder == pytest.approx(3.0, rel=1e-9)  # w_flat / w_cylinder
         # the flat's scar is wider than the cylinder's by about the 3 mm stroke
-        assert _worn_width(coordinates[:, 0], depth[()]) - _worn_width(points[:, 0], slave) > 2.5
+        assert worn_width(coordinates[:, 0], depth[()]) - worn_width(points[:, 0], slave) > 2.5
 
 
 def test_paraview_writes_the_master_wear_on_the_master_surface(finite, tmp_path):
