@@ -250,17 +250,26 @@ def _point(text: str) -> list[float]:
 
 
 def cmd_study(args) -> int:
-    from pipelines.studies.constant_cof import constant_cof_comparison
+    """`fretwork study constant-cof`: both models' max shear at the probes; the plot and the HDF5 file in --out."""
+    from pipelines.cli.accuracy import set_overrides
+    from pipelines.output.constant_cof_plot import plot_constant_cof
+    from pipelines.studies.constant_cof import constant_cof_comparison, write_comparison
 
     probes = {f"P{k + 1}": _point(p) for k, p in enumerate(args.probe)}
-    records = constant_cof_comparison(args.scene, probes)
+    comparison = constant_cof_comparison(args.scene, probes, set_overrides(args.set))
+    out = Path(args.out)
+    summary = {"scene": comparison.scene_name, "records": comparison.records(),
+               "plot": str(plot_constant_cof(comparison, out / "constant_cof.png")),
+               "file": str(write_comparison(comparison, out / "constant_cof.h5"))}
     if args.json:
-        print(_json(records))
+        print(_json(summary))
     else:
-        for r in records:
+        for r in summary["records"]:
             print(f"{r['model']:<20} {r['probe']} at {np.round(r['position_mm'], 2)} mm "
                   f"({r['distance_mm']:.2g} mm from the probe): "
                   f"max shear {r['max_shear_MPa']:.2f} MPa (slip area {r['slip_area_fraction']:.0%})")
+        print(f"  plot: {summary['plot']}")
+        print(f"  data: {summary['file']}")
     return 0
 
 
@@ -451,10 +460,17 @@ def _add_reduce_parser(sub) -> None:
 def _add_study_parsers(sub) -> None:
     study = sub.add_parser("study", help="studies that compare several runs of a scene")
     kinds = study.add_subparsers(dest="study", required=True)
-    constant = kinds.add_parser("constant-cof", help="variable vs constant COF (paper Fig. 8)")
+    constant = kinds.add_parser("constant-cof", help="variable vs constant COF (paper Fig. 8): max shear maps",
+                                description="Run the scene's COF phase with the evolving COF and with a constant "
+                                            "μ = μ_max; plot the last cycle's max shear traction of both over the "
+                                            "contact and print it at the probes.")
     constant.add_argument("scene")
     constant.add_argument("--probe", action="append", default=[],
                           help="probe point 'x,y[,z]' in mm (repeat; paper's P1, P2)")
+    constant.add_argument("--out", default="results/constant_cof",
+                          help="folder of the plot constant_cof.png and the data constant_cof.h5 (default %(default)s)")
+    constant.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                          help="override a scene value for both models (repeatable), e.g. procedure.cof_cycles=20")
     constant.add_argument("--json", action="store_true")
     constant.set_defaults(func=cmd_study)
     from pipelines.cli.accuracy import add_accuracy_parser
