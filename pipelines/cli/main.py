@@ -535,7 +535,9 @@ OUTPUTS = {
     "mbs": ("run.h5", "wing_time_history.png", "wing_spectrum.png", "wing_order_spectrum.png", "campbell.png",
             "report.html"),
     "study convergence": ("size_*mm", "convergence.png", "convergence.json", "report.html"),
-    "validate": ("wear_gap_vs_geometry.png",),
+    "study constant-cof": ("constant_cof.png", "constant_cof.h5", "report.html"),
+    "study accuracy": ("accuracy_*.png", "accuracy_*.json", "report.html"),
+    "validate": ("wear_gap_vs_geometry.png", "finite_sliding_scars.png"),
     "reduce": ("reduction_error_vs_modes.png",),
 }
 #: Commands whose one output is written anew under its name: it is not removed before they run,

@@ -13,7 +13,7 @@ import pytest
 from matplotlib.image import imread
 
 from pipelines.cli.main import main
-from pipelines.output.locks import LOCK_NAME
+from pipelines.output.locks import LOCK_NAME, MANIFEST_NAME
 from pipelines.studies import constant_cof
 from reduction.errors import InputError
 
@@ -92,6 +92,8 @@ def test_out_holds_the_plot_and_the_fields_of_both_models(tmp_path, capsys):
     printed = _study(capsys, SCENE, out, "--probe=-4,1,0", "--probe", "6,-6,0")
     assert printed["plot"] == str(out / "constant_cof.png") and printed["file"] == str(out / "constant_cof.h5")
     assert printed["scene"] == "bolted_blocks" and not (out / LOCK_NAME).exists()
+    # recorded as fretwork's, so that a rerun clears them and a user's file of the name is refused
+    assert {"constant_cof.png", "constant_cof.h5"} <= set((out / MANIFEST_NAME).read_text().split())
     _png(out / "constant_cof.png")
     with h5py.File(out / "constant_cof.h5", "r") as file:
         assert file.attrs["fretwork_format"] == "fretwork-constant-cof" and file.attrs["format_version"] == 1
