@@ -51,6 +51,7 @@ from contact import procedure
 from contact.solver import ContactSolver
 from pipelines import scene as scenes
 from pipelines.build import build
+from pipelines.coupling import multibody_loading
 from pipelines.output.results import FIELD_UNITS, STATUS_NAMES
 from reduction.errors import InputError
 
@@ -191,13 +192,15 @@ def constant_cof_comparison(scene_path: str | Path, probes: dict, overrides: dic
     variable = scenes.load(scene_path, {**overrides, "scene.effects": effects})
     constant = scenes.load(scene_path, {**overrides, "scene.effects": [e for e in effects if e != "cof_evolution"],
                                         "contact.cof_initial": cof_max})
-    model = build(variable)
+    # one multibody run for both (a coupled scene): the COF is not one of its inputs
+    multibody = multibody_loading(variable, None) if "coupling" in variable.data else None
+    model = build(variable, multibody=multibody)
     pairing = model.assembly.pairing
     coordinates, area, facets = pairing.slave.coordinates.copy(), pairing.area.copy(), pairing.slave.facets.copy()
     points = probe_points(probes, coordinates)
     runs = [_last_cycle("variable", "variable COF", variable, model)]
     del model, pairing  # one model in memory at a time
-    runs.append(_last_cycle("constant", f"constant COF {cof_max:g}", constant, build(constant)))
+    runs.append(_last_cycle("constant", f"constant COF {cof_max:g}", constant, build(constant, multibody=multibody)))
     return Comparison(base.name, base.dimension, float(cof_initial), float(cof_max), coordinates, area, facets,
                       tuple(points), tuple(runs))
 
