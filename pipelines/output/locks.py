@@ -16,7 +16,8 @@
   modification time and size, its path relative to the folder). A file is fretwork's when the
   manifest lists it and it is unchanged since (a file the user wrote over is not), or when it
   says so itself: an HDF5 file whose root attribute ``fretwork_format`` starts with "fretwork-"
-  (results, checkpoint, multibody and sweep files), or a page of ``fretwork report``. Where the
+  (results, checkpoint, multibody and sweep files), an HDF5 file named ``*.part`` that cannot be
+  read (a results file half-written when its run was killed), or a page of ``fretwork report``. Where the
   command writes, a file that is not fretwork's is never removed: the command is refused, naming
   the files and the way out (another folder, or remove them yourself);
 - the outputs an earlier run of the command left there are then removed, said in one note line,
@@ -226,8 +227,11 @@ def _says_fretwork(path: Path) -> bool:
         try:
             with h5py.File(path, "r") as file:
                 tag = file.attrs.get("fretwork_format", "")
-        except (OSError, KeyError, ValueError):  # a half-written or damaged file proves nothing
-            return False
+        except (OSError, KeyError, ValueError):
+            # a damaged file proves nothing, but for the half-written results file of a run
+            # killed in the middle of a write (results.h5.part: the name of fretwork's
+            # half-written files, HDF5 by its signature), which its --resume must take over
+            return path.name.endswith(".part")
         return (tag.decode(errors="replace") if isinstance(tag, bytes) else str(tag)).startswith("fretwork-")
     return f"<title>{REPORT_TITLE}".encode() in head
 

@@ -117,6 +117,21 @@ def test_files_that_say_they_are_fretwork_s_are_removed_without_a_manifest(tmp_p
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_results_file_half_written_when_its_run_was_killed_is_fretwork_s(tmp_path):
+    """A run killed (SIGKILL) in the middle of a write leaves a results.h5.part that HDF5 cannot
+    open: its --resume takes it over (it was refused as not fretwork's, once in a CI pass); an
+    unreadable HDF5 file under an output's own name is still refused."""
+    damaged = b"\x89HDF\r\n\x1a\n" + bytes(range(256)) * 8
+    (tmp_path / "results.h5.part").write_bytes(damaged)
+    with claim(tmp_path, outputs=("results.h5", "results.h5.part"), clear=False):  # --resume
+        pass
+    assert (tmp_path / "results.h5.part").exists()
+    (tmp_path / "results.h5").write_bytes(damaged)
+    with pytest.raises(InputError, match="fretwork did not write, where this command writes its outputs: "
+                                         "results.h5;"), claim(tmp_path, outputs=("results.h5", "results.h5.part")):
+        pass
+
+
 def test_the_command_that_ran_in_the_users_folder(tmp_path, capsys, monkeypatch):
     """`cd d; fretwork run SCENE --out .` with the user's plots/mine.txt in d: refused, kept."""
     (tmp_path / "plots").mkdir()
