@@ -23,8 +23,8 @@ VERDICT_MEANINGS = {
     "partial_slip": "a stick zone holds and the clamp force is stable, but the contact edges keep sliding at a "
                     "COF that never had to rise (constant COF, or mu_0 = mu_max): fretting at the edges, no "
                     "friction-driven surface damage; judge crack risk by FFDP",
-    "damage": "points keep sliding at mu_max after their COF rose there (or the whole contact slides): fretting "
-              "scars expected, clamp force stable",
+    "damage": "points keep sliding after their COF rose there, at mu_max or still rising towards it when the run "
+              "ended (or the whole contact slides): fretting scars expected, clamp force stable",
     "loosening": "the clamp force keeps falling while the stick area shrinks: the joint loosens",
 }
 

@@ -53,8 +53,8 @@ ABAQUS_SOLIDS = {
     **dict.fromkeys(("C3D10", "C3D10H", "C3D10M", "C3D10MH", "C3D10I"), "C3D10"),
     **dict.fromkeys(("C3D8", "C3D8H", "C3D8R", "C3D8RH"), "C3D8"),
     **dict.fromkeys(("C3D20", "C3D20H", "C3D20R", "C3D20RH"), "C3D20"),
-    **dict.fromkeys(("CPE3", "CPE3H", "CPS3"), "CPS3"),  # a 2D mesh is plane strain whichever type wrote it
-    **dict.fromkeys(("CPE4", "CPE4H", "CPE4R", "CPE4RH", "CPS4", "CPS4R"), "CPS4"),
+    **dict.fromkeys(("CPE3", "CPE3H"), "CPS3"),  # meshio reads plane-strain elements as these cells
+    **dict.fromkeys(("CPE4", "CPE4H", "CPE4R", "CPE4RH"), "CPS4"),
 }
 #: meshio reads these as Hex8, but their displacement field is not Hex8's
 _ENRICHED_HEX8 = ("C3D8I", "C3D8IH")
@@ -187,6 +187,7 @@ def _abaqus_base_types(path: Path, label: str) -> io.StringIO:
     InputError naming a type that is neither such a solid nor one meshio reads (surfaces, beams:
     sets only). The buffer is named as the file: meshio finds *INCLUDE files next to it."""
     text = path.read_text(errors="replace")
+    _refuse_non_plane_strain(text, label)
 
     def base_type(match: re.Match) -> str:
         kind = match.group(2).upper()
@@ -203,6 +204,33 @@ def _abaqus_base_types(path: Path, label: str) -> io.StringIO:
     buffer = io.StringIO(_ABAQUS_ELEMENT.sub(base_type, text))
     buffer.name = str(path)
     return buffer
+
+
+#: Abaqus plane-stress elements: meshio reads them as the plane-strain ones' cells
+_PLANE_STRESS = ("CPS3", "CPS4", "CPS4R")
+
+
+def _refuse_non_plane_strain(text: str, label: str) -> None:
+    """InputError for a 2D Abaqus mesh (no C3D solids) whose elements are not plane-strain
+    solids: plane-stress elements, whose bodies are softer (E against E/(1 − ν²)), or shells,
+    membranes and rigid elements that meshio reads as the same triangles and quads. fretwork's
+    2D bodies are plane strain; read as such, they gave a plane-strain answer without a word."""
+    found = [(match.group(2).upper(), text.count("\n", 0, match.start()) + 1)
+             for match in _ABAQUS_ELEMENT.finditer(text)]
+    if any(kind.startswith("C3D") for kind, _ in found):
+        return  # a 3D mesh: other elements only give sets
+    plane_strain = {kind for kind in ABAQUS_SOLIDS if kind.startswith("CPE")}
+    cells_2d = {"triangle", "quad", "triangle6", "quad8", "quad9"}
+    for kind, line in found:
+        if kind in _PLANE_STRESS:
+            raise InputError(f"{label}: plane-stress element type {kind} (line {line}): fretwork's 2D bodies are "
+                             "plane strain (CPE3, CPE4, CPE4R), which are stiffer; write the mesh with plane-strain "
+                             "elements, or model the body in 3D")
+        if (kind not in plane_strain and meshio.abaqus._abaqus.abaqus_to_meshio_type.get(kind) in cells_2d
+                and not any(other in plane_strain for other, _ in found)):
+            raise InputError(f"{label}: element type {kind} (line {line}) is a shell, membrane or rigid element, "
+                             "not a plane-strain solid; fretwork's 2D bodies are plane strain (CPE3, CPE4, CPE4R) "
+                             "and its 3D ones solids (C3D4, C3D10, C3D8, C3D20)")
 
 
 def _undefined_number(path: Path, number) -> str:

@@ -79,3 +79,28 @@ def test_other_element_types_are_refused_by_name(tmp_path, element_type, why):
     message = str(refused.value)
     assert message.startswith(f"'bodies.cw.mesh': {path}: unsupported element type {element_type} (line ")
     assert why in message and "C3D4H" in message and "internal" not in message
+
+
+def _plate(tmp_path, element_type):
+    """A 20 x 10 mm plate of quads written with the *ELEMENT type ``element_type``."""
+    mesh = skfem.MeshQuad.init_tensor(np.linspace(0, 20, 5), np.linspace(0, 10, 3))
+    path = tmp_path / f"{element_type}.inp"
+    meshio.write(path, meshio.Mesh(mesh.p.T, [("quad", mesh.t.T[:, ::-1])]))  # counter-clockwise
+    path.write_text(re.sub(r"(?im)^(\*ELEMENT\s*,\s*TYPE\s*=\s*)\S+?(?=,|$)", lambda m: m.group(1) + element_type,
+                           path.read_text()))
+    return path
+
+
+@pytest.mark.parametrize("element_type, why", [
+    ("CPS4", "plane-stress element type CPS4 (line "),
+    ("CPS4R", "plane-stress element type CPS4R (line "),
+    ("S4R", "element type S4R (line "),
+])
+def test_a_2d_mesh_of_other_than_plane_strain_solids_is_refused(tmp_path, element_type, why):
+    """fretwork's 2D bodies are plane strain: plane-stress and shell quads (read by meshio as the
+    same cells) were analysed as plane-strain ones without a word (QA, 2026-11-28)."""
+    with pytest.raises(InputError) as refused:
+        read_mesh(_plate(tmp_path, element_type), "bodies.pad.mesh")
+    assert why in str(refused.value) and "plane strain (CPE3, CPE4" in str(refused.value)
+    for plane_strain in ("CPE4", "CPE4R"):
+        assert read_mesh(_plate(tmp_path, plane_strain)).mesh.t.shape == (4, 8)
