@@ -158,6 +158,8 @@ class IncrementRecord:
     cutbacks: int
     substeps: int
     bolt_forces: np.ndarray | None = None
+    #: ε_lock (mm) of each bolt once locked (:mod:`contact.bolts`), None before or without bolts
+    locked_elongation: np.ndarray | None = None
 
 
 @dataclass
@@ -260,7 +262,8 @@ class _Run:
                                                                            amplitudes, effects, position)
         self.observer.increment(IncrementRecord(phase, cycle, t, self.equilibrium, self.state, status,
                                                 stats.iterations, stats.max_iterations, stats.cutbacks,
-                                                stats.substeps, self.bolt_forces()))
+                                                stats.substeps, self.bolt_forces(),
+                                                None if self.bolts is None else self.bolts.locked_elongation))
         return status
 
     def lock(self, elongation):

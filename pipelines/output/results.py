@@ -16,7 +16,10 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
                            contact surface's facets (lines in 2D, quads/triangles in 3D)
     /increments/           one row per converged increment: time (cycles), cycle, phase
                            (0 preload, 1 cof, 2 wear), iterations, cutbacks,
-                           external_work, stored_energy, dissipation (mJ), bolt_forces
+                           external_work, stored_energy, dissipation, wear_release and
+                           stick_source (mJ: external_work + stick_source − stored_energy −
+                           wear_release is the dissipation measured globally,
+                           contact.energy), bolt_forces
                            (rows, n_bolts) N with the bolt names in its ``bolts`` attribute,
                            control/displacement and control/force (rows, n_dofs) mm and N (rad
                            and N*mm for rotations: per column in their ``units``), the DOF
@@ -292,10 +295,11 @@ class ResultsWriter(Observer):
         area = self.model.assembly.structure.area
         self._row("dissipation", float(np.sum(record.state.dissipation * area)), "mJ")
         if self.meter is not None:
-            work, stored = self.meter.update(record.equilibrium, record.state)
+            work, stored = self.meter.update(record.equilibrium, record.state, record.locked_elongation)
             self._row("external_work", work, "mJ")
             self._row("stored_energy", stored, "mJ")
             self._row("wear_release", self.meter.wear_release, "mJ")
+            self._row("stick_source", self.meter.stick_source, "mJ")
             displacement, forces = self.meter.control_values(np.fromiter(self.labels.values(), dtype=int))
             self._row("control/displacement", displacement, "mm")
             self._row("control/force", forces, "N")

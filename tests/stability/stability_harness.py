@@ -175,7 +175,7 @@ class Watchdog(Observer):
         check_history(self.previous, state, self.case.law, where)
         self.previous = state
         if self.meter is not None:
-            self.external_work, self.stored = self.meter.update(equilibrium, state)
+            self.external_work, self.stored = self.meter.update(equilibrium, state, record.locked_elongation)
             assert np.isfinite(self.external_work) and np.isfinite(self.stored), where
 
     @property
