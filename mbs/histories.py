@@ -60,14 +60,16 @@ def unsettled_change(crank_angle: np.ndarray, torsion: np.ndarray) -> float | No
     |A_last - A_first| / max(A_last, A_first), the largest over the CWs.
 
     crank_angle (n,) rad over the whole run; torsion (n,) or (number of CWs, n) mm, the wing
-    torsion over the whole run. None when the steady half is shorter than one engine cycle:
-    the run's steadiness cannot be judged. Compare with :data:`SETTLED_CHANGE`.
+    torsion over the whole run. None when the steady half is shorter than two engine cycles:
+    the first and the last would overlap (they were the same samples at 4 revolutions, and the
+    change read 0 for a run still ringing down: QA, 2026-11-28), and the run's steadiness
+    cannot be judged. Compare with :data:`SETTLED_CHANGE`.
     """
     revolutions = (np.asarray(crank_angle, dtype=float) - crank_angle[0]) / (2.0 * np.pi)
     torsion = np.atleast_2d(np.asarray(torsion, dtype=float))
     span, slack = ENGINE_CYCLE_REVOLUTIONS, 1e-9 * max(revolutions[-1], 1.0)
     start, end = revolutions[steady_part(revolutions.size)][0], revolutions[-1]
-    if end - start < span - slack:
+    if end - start < 2.0 * span - slack:
         return None
     first = (revolutions >= start - slack) & (revolutions <= start + span + slack)
     last = revolutions >= end - span - slack
@@ -86,7 +88,8 @@ def unsettled_message(change: float | None, revolutions: float, speed_rpm: float
               "died out before the second half of the run, where the wing amplitude is measured")
     if change is None:
         return (f"the multibody run at {speed_rpm:g} rpm is too short to check that its response is steady "
-                f"(its second half must span one engine cycle, {ENGINE_CYCLE_REVOLUTIONS:g} revolutions): {advice}")
+                f"(its second half must span two engine cycles, {2 * ENGINE_CYCLE_REVOLUTIONS:g} revolutions, to "
+                f"compare the first with the last): {advice}")
     return (f"the multibody response at {speed_rpm:g} rpm is not steady: the wing amplitude over the last "
             f"engine cycle differs by {100 * change:.1f} % from that over the first of the run's second half "
             f"(at most {100 * SETTLED_CHANGE:.0f} %): {advice}")
