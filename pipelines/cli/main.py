@@ -576,7 +576,11 @@ def _check_input(args) -> None:
         return
     if args.command in ("mbs", "sweep"):
         from pipelines.cli.mbs import model_params
-        model_params(path)  # the whole scene is valid and has an [mbs] table
+        from pipelines.jobs.sweep import check_resolution, parse_speeds
+
+        params = model_params(path)  # the whole scene is valid and has an [mbs] table
+        speeds = parse_speeds(args.speeds) if isinstance(getattr(args, "speeds", None), str) else [params.speed_rpm]
+        check_resolution(params, speeds)  # a time step that cannot follow a speed's excitation (warnings: later)
         data = scenes.tables(path)
     else:
         data = scenes.load(path).data

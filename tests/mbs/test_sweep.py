@@ -145,15 +145,15 @@ def test_a_speed_whose_excitation_the_time_step_cannot_sample_is_refused_before_
     error = capsys.readouterr().err
     assert error.startswith("fretwork: error: at 75000 rpm the multibody time step 5e-05 s cannot follow the gear "
                             "mesh (engine order 48): at 75000 rpm it is 60000 Hz, 0.33 steps per period")
-    assert "set [mbs.solver] time_step to at most 1.7e-06 s" in error and "speeds up to 2500 rpm" in error
+    assert "set [mbs.solver] time_step to at most 4.2e-07 s" in error and "speeds up to 625 rpm" in error
 
 
 def test_a_time_step_that_samples_the_excitation_coarsely_is_warned_about():
     params = ModelParams(n_modes=2, effects=frozenset({"gear_mesh"}), solver=SolverParams(time_step=1e-4))
-    assert check_resolution(params, [700.0, 750.0]) == []  # 48 x 12.5 Hz = 600 Hz: 17 steps per period
-    warning, = check_resolution(params, [700.0, 2000.0, 3000.0])
-    assert warning.startswith("at 2000 and 3000 rpm the multibody time step 0.0001 s follows the gear mesh (engine "
-                              "order 48) with fewer than 10 steps per period (4.2 at 3000 rpm, 2400 Hz)")
+    assert check_resolution(params, [200.0, 250.0]) == []  # 48 x 250/60 Hz = 200 Hz: 50 steps per period
+    warning, = check_resolution(params, [200.0, 750.0, 3000.0])  # 750 rpm: 600 Hz, 17 steps per period
+    assert warning.startswith("at 750 and 3000 rpm the multibody time step 0.0001 s follows the gear mesh (engine "
+                              "order 48) with fewer than 40 steps per period (4.2 at 3000 rpm, 2400 Hz)")
     gas = ModelParams(n_modes=2, effects=frozenset({"gas_torque"}), solver=SolverParams(time_step=1e-4))
     assert "gas torque" in check_resolution(gas, [40000.0])[0]
     assert check_resolution(replace(params, effects=frozenset()), [75000.0]) == []  # nothing excites the model
@@ -175,3 +175,23 @@ def test_cli_single_run_reads_as_a_summary_with_units(tmp_path, capsys):
     assert lines[3] == f"  CW torsion mode: {summary['torsion_mode_hz']:.1f} Hz"
     assert lines[5] == f"  results: {summary['file']}"
     assert not any("{" in line or "e-0" in line for line in lines)  # no raw dict, no unrounded floats
+
+
+def test_a_refused_time_step_or_speed_loses_no_earlier_output(tmp_path, capsys):
+    """The time step and the speeds are checked before the output folder is cleared: a refused
+    input deleted the earlier run's outputs (QA, 2026-11-28: 'removed 5 output(s)', then the error)."""
+    from pipelines.cli.main import main
+
+    good = tmp_path / "good.toml"
+    good.write_text('[mbs]\nn_modes = 2\neffects = ["gear_mesh"]\n[mbs.solver]\nrevolutions = 0.2\ntime_step = 5e-5\n')
+    coarse = tmp_path / "coarse.toml"
+    coarse.write_text(good.read_text().replace("time_step = 5e-5", "time_step = 2e-3"))  # 375 Hz: 1.3 steps
+    out = tmp_path / "out"
+    assert main(["mbs", str(good), "--out", str(out), "--json"]) == 0
+    written = sorted(p.name for p in out.iterdir())
+    capsys.readouterr()
+    assert main(["mbs", str(coarse), "--out", str(out)]) == 2
+    assert main(["sweep", str(good), "--speeds=-600,750", "--workers", "0", "--out", str(out)]) == 2
+    errors = capsys.readouterr().err
+    assert "cannot follow the gear mesh" in errors and "engine speeds must be positive and finite (rpm), got -600" in errors
+    assert "removed" not in errors and sorted(p.name for p in out.iterdir()) == written
