@@ -216,7 +216,9 @@ def _map(mesh, field: Field, a, b, title, target) -> Path:
         mappable = ax.tripcolor(mesh, value, cmap="viridis", vmin=value[0] - 1.0, vmax=value[0] + 1.0,
                                 edgecolors="none", antialiased=False)
     else:
-        mappable = ax.tricontourf(mesh, value, levels=24, cmap="viridis")
+        # levels spanning the values exactly: with matplotlib's round-number levels a COF of
+        # 0.6000000000000002 lay above the top level 0.6 and was left white where μ_max was reached
+        mappable = ax.tricontourf(mesh, value, levels=np.linspace(value.min(), value.max(), 25), cmap="viridis")
     ax.set_aspect("equal")
     ax.margins(0.0)
     bar = fig.colorbar(mappable, ax=ax, location="bottom" if wide else "right", fraction=0.05, pad=0.02,
