@@ -478,20 +478,69 @@ def _distance_from_box(length, low, high) -> float | None:
     return distance if math.isfinite(distance) else None
 
 
+#: a mean stress above this fraction of the body's Young's modulus (1 % strain) on a mesh under
+#: :data:`_TINY_MESH` across is no elastic joint: most likely the mesh is in metres
+_TINY_MESH_STRAIN = 0.01
+
+
+def _body_loads(data: dict, body: str) -> list[tuple[str, float]]:
+    """(key, N) of the forces the scene puts on ``body``: its [[loads]] and its bolts'
+    pretensions (N, N per mm in 2D). Reads unvalidated tables safely."""
+    found = []
+    for k, load in enumerate(data.get("loads", []) if isinstance(data.get("loads"), list) else []):
+        if (isinstance(load, dict) and str(load.get("dof", "")).split(".")[0] == body
+                and _number(load.get("value"))):
+            found.append((f"loads[{k}].value", abs(float(load["value"]))))
+    bolts = data.get("bolts", {}) if isinstance(data.get("bolts"), dict) else {}
+    for name, bolt in bolts.items():
+        if (isinstance(bolt, dict) and _number(bolt.get("pretension"))
+                and body in (str(bolt.get("head", "")).split(".")[0], str(bolt.get("nut", "")).split(".")[0])):
+            found.append((f"bolts.{name}.pretension", abs(float(bolt["pretension"]))))
+    return found
+
+
+def _overloaded(data: dict, body: str, sizes: list[float]) -> str | None:
+    """Why a tiny mesh's loads say it is in metres: the largest force on the body over its
+    largest cross-section (3D: the product of the box's two largest sizes; 2D, per mm of
+    thickness: its largest size) is above :data:`_TINY_MESH_STRAIN` of its Young's modulus."""
+    spec = data.get("bodies", {}).get(body, {})
+    material = data.get("materials", {}).get(spec.get("material"), {}) if isinstance(spec, dict) else {}
+    young = material.get("youngs_modulus") if isinstance(material, dict) else None
+    loads = _body_loads(data, body)
+    ordered = sorted(sizes, reverse=True)
+    section = ordered[0] if len(sizes) == 2 else ordered[0] * ordered[1]
+    if not (loads and _number(young) and young > 0.0 and section > 0.0):
+        return None
+    key, force = max(loads, key=lambda entry: entry[1])
+    stress = force / section
+    if stress <= _TINY_MESH_STRAIN * young:
+        return None
+    unit = "N per mm" if len(sizes) == 2 else "N"
+    return (f"'{key}' ({force:g} {unit}) on it is {stress:.3g} MPa over its largest section, "
+            f"{100 * stress / young:.2g} % of its Young's modulus")
+
+
 def mesh_unit_problem(data: dict, body: str, low, high, source: str) -> str | None:
     """A body's mesh file most likely written in metres: the mesh (box ``low``…``high``, mm) is
     less than :data:`_TINY_MESH` across while the scene places the body's reference points or
-    selections :data:`_SCENE_LENGTH` or more from it; the sentence names the file (``source``),
-    the mesh's size and the farthest such key. None when the sizes agree."""
+    selections :data:`_SCENE_LENGTH` or more from it, or loads it with more than a
+    :data:`_TINY_MESH_STRAIN` strain's worth of stress over its section (a reference point on the
+    body's own face is no evidence: QA, 2026-11-28, a 2D mesh in metres ran to 'stick' at 10 GPa);
+    the sentence names the file (``source``), the mesh's size and the key. None when the sizes
+    agree."""
     sizes = [float(hi - lo) for lo, hi in zip(low, high)]
     if not max(sizes) < _TINY_MESH:
         return None
+    across = " × ".join(f"{s:.3g}" for s in sizes)
+    advice = (f"the mesh is probably in metres (fretwork reads mm, so {max(sizes):.3g} m would be "
+              f"{1e3 * max(sizes):.4g} mm); export it in mm or scale its coordinates by 1000")
     found = [(d, key) for key, length in _body_lengths(data, body)
              if (d := _distance_from_box(length, low, high)) is not None]
-    if not found or max(found)[0] < _SCENE_LENGTH:
-        return None
-    distance, key = max(found)
-    across = " × ".join(f"{s:.3g}" for s in sizes)
-    return (f"{source}: the mesh is {max(sizes):.3g} mm across ({across} mm), but '{key}' lies {distance:.3g} mm "
-            f"from it: the mesh is probably in metres (fretwork reads mm, so {max(sizes):.3g} m would be "
-            f"{1e3 * max(sizes):.4g} mm); export it in mm or scale its coordinates by 1000")
+    if found and max(found)[0] >= _SCENE_LENGTH:
+        distance, key = max(found)
+        return (f"{source}: the mesh is {max(sizes):.3g} mm across ({across} mm), but '{key}' lies "
+                f"{distance:.3g} mm from it: {advice}")
+    overloaded = _overloaded(data, body, sizes)
+    if overloaded is not None:
+        return f"{source}: the mesh is {max(sizes):.3g} mm across ({across} mm), but {overloaded}: {advice}"
+    return None

@@ -93,6 +93,28 @@ def test_a_small_mesh_near_its_scene_lengths_is_not_a_unit_mistake():
     assert mesh_unit_problem(data, "pin", [-3.0, -3.0, 0.0], [3.0, 3.0, 4.0], "pin.inp") is None
 
 
+def test_a_tiny_mesh_loaded_like_a_joint_is_a_unit_mistake_wherever_its_points_are():
+    """A 2D pad in metres (20 x 10 mm written as 0.02 x 0.01) with its reference point on its own
+    top face ran to 'stick' at 10 GPa (QA, 2026-11-28): the load over the section says metres."""
+    from pipelines.scene.checks import mesh_unit_problem
+
+    data = {"scene": {"dimension": 2}, "materials": {"steel": {"youngs_modulus": 210000.0}},
+            "bodies": {"pad": {"material": "steel", "reference_points": {"rp": {"position": [0.0, 0.01]}}}},
+            "loads": [{"name": "press", "dof": "pad.rp.uy", "value": -200.0}]}
+    message = mesh_unit_problem(data, "pad", [-0.01, 0.0], [0.01, 0.01], "pad.inp")
+    assert message == ("pad.inp: the mesh is 0.02 mm across (0.02 × 0.01 mm), but 'loads[0].value' (200 N per mm) "
+                       "on it is 1e+04 MPa over its largest section, 4.8 % of its Young's modulus: the mesh is "
+                       "probably in metres (fretwork reads mm, so 0.02 m would be 20 mm); export it in mm or scale "
+                       "its coordinates by 1000")
+    data["loads"][0]["value"] = -20.0  # 1,000 MPa: 0.48 % strain, a small but possible body
+    assert mesh_unit_problem(data, "pad", [-0.01, 0.0], [0.01, 0.01], "pad.inp") is None
+    # in 3D a bolt's pretension counts as well: 20 kN over 0.04 x 0.01 mm
+    data = {"materials": {"steel": {"youngs_modulus": 210000.0}}, "bodies": {"plate": {"material": "steel"}},
+            "bolts": {"m10": {"head": "plate.head", "nut": "base.nut", "pretension": 20000.0}}}
+    assert "'bolts.m10.pretension' (20000 N)" in mesh_unit_problem(data, "plate", [0, 0, 0], [0.04, 0.01, 0.005],
+                                                                  "plate.inp")
+
+
 @pytest.mark.parametrize("overrides, expected", [
     ({"bolts.screw_1.axis": [0.0, 1.0, 0.0]},
      "'bolts.screw_1.axis' = [0.0, 1.0, 0.0] points from the nut to the head: the reference points' positions "
