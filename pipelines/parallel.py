@@ -115,7 +115,10 @@ def _call(function: Callable, kwargs: dict, **shared) -> tuple[bool, object]:
         return False, _describe(error)
 
 
-def _describe(error: BaseException) -> str:
+def _describe(error: BaseException | None, status: str = "") -> str:
+    if error is None:  # a future the cluster gave up on without an exception (QA: "NoneType: None")
+        return (f"it did not finish on the cluster (its state: {status or 'unknown'}): a worker was lost or "
+                "the cluster closed; run again, or with --workers 0 in this process")
     return f"{type(error).__name__}: {error}"
 
 
@@ -280,7 +283,7 @@ def _distributed(client, function, cases, shared, label, progress) -> list[CaseO
                     error = future.exception()
                 except BaseException as cancelled:  # a cancelled future has no exception to give
                     error = cancelled
-                results[position[future.key]] = (False, _describe(error))
+                results[position[future.key]] = (False, _describe(error, future.status))
             bar.update(1)
     attempts = _attempts(client, [future.key for future in futures])
     return [CaseOutcome(key, value if ok else None, None if ok else value, attempts.get(future.key))

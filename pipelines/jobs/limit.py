@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from contact.verdict import Ending
+from contact.solver import ConvergenceError
 from reduction.errors import InputError
 
 SAFE = "stick"
@@ -262,8 +263,8 @@ def _search(scene_path, low_mm, high_mm, tolerance_mm, grid, overrides, cache_di
             runs[outcome.key] = outcome.value if outcome.error is None else \
                 AmplitudeRun(outcome.key, None, {}, outcome.error)
         failed = [runs[a] for a in amplitudes if runs[a].verdict is None]
-        if failed:
-            raise InputError("the limit search cannot continue: the run at " + "; ".join(
+        if failed:  # not the input's fault (it was checked): a stopped simulation, exit status 1
+            raise ConvergenceError("the limit search cannot continue: the run at " + "; ".join(
                 f"{format_um(r.amplitude_mm, tolerance_mm)} µm failed ({r.error})" for r in failed))
         return {a: runs[a].verdict for a in amplitudes}
 

@@ -189,3 +189,21 @@ def test_the_cluster_logs_are_silenced_unless_asked_for(monkeypatch):
     assert _cluster_log_level() > logging.CRITICAL  # the scheduler's CRITICAL lines at a Ctrl-C too
     monkeypatch.setenv("FRETWORK_DASK_LOGS", "1")
     assert _cluster_log_level() == logging.WARNING
+
+
+def test_a_case_the_cluster_gave_up_on_without_an_exception_is_said_in_words():
+    """A future that did not finish and has no exception read 'NoneType: None' in the limit
+    search's error (QA, 2026-11-28); the search then stops as a stopped simulation (exit 1)."""
+    from contact.solver import ConvergenceError
+    from pipelines.jobs import limit
+    from pipelines.parallel import _describe
+
+    said = _describe(None, "lost")
+    assert said.startswith("it did not finish on the cluster (its state: lost)") and "None" not in said
+    assert _describe(ValueError("x = 2 is out of range")) == "ValueError: x = 2 is out of range"
+
+    def lost(function, cases, **_):  # every case comes back as the cluster gave up on it
+        return [CaseOutcome(key, None, said, 1) for key, _ in cases]
+
+    with pytest.raises(ConvergenceError, match="the run at 100.0 µm failed \\(it did not finish on the cluster"):
+        limit._search("scene.toml", 0.1, 0.4, 0.05, 3, None, None, None, {}, 1, False, lost)
