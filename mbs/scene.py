@@ -20,6 +20,7 @@ mbs.excitation.gas_torque_from_pressure with the throw's crank radius.
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import tomllib
 from dataclasses import fields, replace
@@ -40,10 +41,20 @@ _SUBTABLES = {
 }
 
 
-def _checked(table: dict, allowed: set, where: str) -> None:
+def _unknown(table: dict, allowed: set, where: str) -> str | None:
+    """The sentence naming ``table``'s unknown keys (each with its likely meant key), or None."""
     unknown = sorted(set(table) - allowed)
-    if unknown:
-        raise InputError(f"{where}: unknown key(s) {unknown}; allowed: {sorted(allowed)}")
+    if not unknown:
+        return None
+    meant = {key: difflib.get_close_matches(key, sorted(allowed), n=1) for key in unknown}
+    hints = "".join(f" ({key!r}: did you mean {meant[key][0]!r}?)" for key in unknown if meant[key])
+    return f"{where}: unknown key(s) {unknown}{hints}; allowed: {sorted(allowed)}"
+
+
+def _checked(table: dict, allowed: set, where: str) -> None:
+    problem = _unknown(table, allowed, where)
+    if problem:
+        raise InputError(problem)
 
 
 def _as_field_value(value):
@@ -92,7 +103,13 @@ def _field_values(table: dict, where: str, folder: Path | None) -> dict:
     per sub-table; unknown keys refused. With ``folder`` the counterweight's mesh file is made
     absolute and digested (:func:`_with_mesh_digest`); without it no file is read."""
     top_fields = {f.name for f in fields(ModelParams)}
-    _checked(table, top_fields | {"gas_pressure"}, where)
+    # every table's unknown keys in one message, not the first table's alone
+    problems = [_unknown(table, top_fields | {"gas_pressure"}, where)]
+    problems += [_unknown(value, {f.name for f in fields(_SUBTABLES[name])}, f"{where}.{name}")
+                 for name, value in table.items() if name in _SUBTABLES and isinstance(value, dict)]
+    problems = [problem for problem in problems if problem]
+    if problems:
+        raise InputError("; ".join(problems))
     values = {}
     for name, value in table.items():
         if name == "gas_pressure":

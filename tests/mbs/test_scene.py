@@ -44,3 +44,17 @@ def test_a_scene_without_an_mbs_table_is_refused_not_run_with_defaults(tmp_path,
         load_model_params(scene)
     assert main(["mbs", str(scene), "--out", str(tmp_path / "out")]) == 2
     assert "no [mbs] table" in capsys.readouterr().err and not (tmp_path / "out").exists()
+
+
+def test_every_tables_unknown_keys_are_named_at_once_with_the_key_meant(tmp_path):
+    """A misspelt key in [mbs] and another in [mbs.solver]: both in one message (only the first
+    was named; QA, 2026-11-28)."""
+    from mbs.scene import load_model_params
+
+    path = tmp_path / "typos.toml"
+    path.write_text("[mbs]\nspeed_rmp = 700\nn_modes = 2\n[mbs.solver]\ntimestep = 1e-4\n")
+    with pytest.raises(InputError) as refused:
+        load_model_params(path)
+    message = str(refused.value)
+    assert "unknown key(s) ['speed_rmp'] ('speed_rmp': did you mean 'speed_rpm'?)" in message
+    assert "[mbs].solver: unknown key(s) ['timestep'] ('timestep': did you mean 'time_step'?)" in message
