@@ -166,6 +166,12 @@ def run_single(args) -> int:
 
         loading = run_loading(params, outputs.reduced, histories, counterweight)
         interface = str(write_interface_histories(args.interface_histories, from_loading(loading)))
+        if Path(interface).suffix.lower() == ".csv" and loading.mode_shapes.size and params.counterweight.mesh_file is None:
+            # a CSV holds no cells: read back, its mode shapes take their elements from the scene's
+            # CW mesh, which here is not the multibody CW's generated block (QA, 2026-11-28)
+            print(f"fretwork: note: {interface} holds the mode shapes on the multibody CW's generated mesh "
+                  "without its cells: a scene reads them back only with that mesh as its CW; write .h5, "
+                  "which keeps the cells, to drive another CW mesh", file=sys.stderr)
     summary = {
         "file": str(outputs.results_file),
         "plots": {name: str(path) for name, path in outputs.plots.items()},
