@@ -598,6 +598,8 @@ def _checked(path: Path, meta: dict, columns: dict, modes: ModeShapes | None) ->
             raise InputError(f"{path}: '{quantity}' holds non-finite values")
     _check_speed(path, speed, values["angular_velocity"][:, 2])
     _check_revolution_sampling(path, speed, time, time_unit)
+    _check_frame_radius(path, values["frame_acceleration"], values["angular_velocity"][:, 2],
+                        columns["frame_acceleration"][1])
     q = values.get("modal_coordinate")
     if (q is None) != (modes is None):
         raise InputError(f"{path}: modal coordinates and mode shapes go together: give both or neither")
@@ -611,6 +613,27 @@ def _checked(path: Path, meta: dict, columns: dict, modes: ModeShapes | None) ->
     return InterfaceHistories(speed, time, values["frame_acceleration"], values["angular_velocity"],
                               values["angular_acceleration"], values.get("wing_torsion"), q, velocity,
                               acceleration, modes, str(path))
+
+
+#: the largest distance (mm) of a CW interface frame from the spin axis that an engine has: the
+#: largest crank radii are about 1.5 m
+_LARGEST_RADIUS_MM = 10000.0
+
+
+def _check_frame_radius(path: Path, frame_acceleration: np.ndarray, spin: np.ndarray, unit: str) -> None:
+    """InputError when the mean frame acceleration (mm/s²) over the mean spin squared puts the
+    frame farther than :data:`_LARGEST_RADIUS_MM` from the axis: a unit mistake, most likely
+    (QA, 2026-11-28: mm/s² labelled m/s² ran into a Newton failure at 1000 ω²r). The centripetal
+    acceleration ω²·r dominates the mean; a file that hardly spins is not judged."""
+    omega = float(np.mean(np.abs(spin)))
+    if omega < 1.0:  # rad/s: a static or slow case says nothing about its radius
+        return
+    radius = float(np.linalg.norm(np.mean(frame_acceleration, axis=0))) / omega ** 2
+    if radius > _LARGEST_RADIUS_MM:
+        raise InputError(f"{path}: the mean frame_acceleration ({np.linalg.norm(np.mean(frame_acceleration, axis=0)):.3g} "
+                         f"mm/s², read as {unit}) over the mean spin squared ({omega:.4g} rad/s) puts the CW frame "
+                         f"{radius / 1000:.3g} m from the spin axis: check the unit of frame_acceleration (values in "
+                         "mm/s² labelled m/s² are read 1000 times too large)")
 
 
 def _modal_factor(path: Path, quantity: str, unit: str, modes: ModeShapes | None) -> float:

@@ -289,3 +289,16 @@ def test_a_revolution_cycle_on_a_file_shorter_than_a_revolution_names_the_file_n
         cycle_loading(short, "revolution", None, 8)
     with pytest.raises(InputError, match=r"raise \[mbs.solver\] revolutions"):  # a multibody run's advice
         cycle_loading(replace(short, revolutions=1.0), "revolution", None, 8)
+
+
+def test_a_frame_acceleration_in_the_wrong_unit_is_refused_by_the_radius_it_implies(tmp_path):
+    """ω²·r at 750 rpm and r = 230 mm is 1.42e6 mm/s²: written as 1.42e6 but labelled m/s² it is read
+    as 1.42e9 mm/s², a frame 230 m from the axis (it ended in a Newton failure; QA, 2026-11-28)."""
+    centripetal = (750 * 2 * np.pi / 60) ** 2 * 230.0  # mm/s²
+    rows = "".join(f"{t:g},0,{-centripetal:.6g},0,0,0,750,0,0,0,5\n" for t in np.arange(10) * 0.1)
+    with pytest.raises(InputError, match=r"puts the CW frame 230 m from the spin axis: check the unit of "
+                                         r"frame_acceleration"):
+        read_interface_histories(_csv(tmp_path, HEADER + rows))
+    right = HEADER.replace("[m/s^2]", "[mm/s^2]")
+    read = read_interface_histories(_csv(tmp_path, right + rows))  # in its own unit: 230 mm, accepted
+    assert read.frame_acceleration[0, 1] == pytest.approx(-centripetal, rel=1e-5)  # 6 digits written
