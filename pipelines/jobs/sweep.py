@@ -59,9 +59,9 @@ def parse_speeds(text: str) -> np.ndarray:
 #: a resonance the amplitude follows the integrator's frequency error, not only its period error
 #: (2π/n)²/12. Measured at 750 rpm against 5e-5 s (53 steps; QA, 2026-11-28): 2e-4 s (13 steps)
 #: read CW1 17 % and CW2 44 % low, 1e-4 s (27 steps) 3 % and 10 % low; the README's 975 rpm case
-#: reads 3 % low at 5e-5 s (41 steps).
+#: reads 3 % low at 5e-5 s (41 steps). 30, not 40: the defaults (48 teeth, 5e-5 s, 750 rpm) give 33.
 SAMPLED_STEPS = 2.0
-ACCURATE_STEPS = 40.0
+ACCURATE_STEPS = 30.0
 
 
 @dataclass(frozen=True)

@@ -145,7 +145,7 @@ def test_a_speed_whose_excitation_the_time_step_cannot_sample_is_refused_before_
     error = capsys.readouterr().err
     assert error.startswith("fretwork: error: at 75000 rpm the multibody time step 5e-05 s cannot follow the gear "
                             "mesh (engine order 48): at 75000 rpm it is 60000 Hz, 0.33 steps per period")
-    assert "set [mbs.solver] time_step to at most 4.2e-07 s" in error and "speeds up to 625 rpm" in error
+    assert "set [mbs.solver] time_step to at most 5.6e-07 s" in error and "speeds up to 833 rpm" in error
 
 
 def test_a_time_step_that_samples_the_excitation_coarsely_is_warned_about():
@@ -153,7 +153,7 @@ def test_a_time_step_that_samples_the_excitation_coarsely_is_warned_about():
     assert check_resolution(params, [200.0, 250.0]) == []  # 48 x 250/60 Hz = 200 Hz: 50 steps per period
     warning, = check_resolution(params, [200.0, 750.0, 3000.0])  # 750 rpm: 600 Hz, 17 steps per period
     assert warning.startswith("at 750 and 3000 rpm the multibody time step 0.0001 s follows the gear mesh (engine "
-                              "order 48) with fewer than 40 steps per period (4.2 at 3000 rpm, 2400 Hz)")
+                              "order 48) with fewer than 30 steps per period (4.2 at 3000 rpm, 2400 Hz)")
     gas = ModelParams(n_modes=2, effects=frozenset({"gas_torque"}), solver=SolverParams(time_step=1e-4))
     assert "gas torque" in check_resolution(gas, [40000.0])[0]
     assert check_resolution(replace(params, effects=frozenset()), [75000.0]) == []  # nothing excites the model
