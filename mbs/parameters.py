@@ -11,6 +11,7 @@ the pin, their contact faces at x = -counterweight_radius.
 from __future__ import annotations
 
 import math
+import numbers
 
 from dataclasses import dataclass, field
 
@@ -217,7 +218,7 @@ class ModelParams:
                 raise InputError(f"{name} must give one angle per throw ({self.throws}), got {len(table)}")
         if self.speed_rpm <= 0:
             raise InputError(f"engine speed_rpm must be positive, got {self.speed_rpm}")
-        if not isinstance(self.n_modes, int) or isinstance(self.n_modes, bool) or self.n_modes < 1:
+        if not isinstance(self.n_modes, numbers.Integral) or isinstance(self.n_modes, bool) or self.n_modes < 1:
             # said here, with its key, not by the Craig-Bampton reduction after the run started
             raise InputError(f"the number of Craig-Bampton modes must be a whole number of at least 1, "
                              f"got {self.n_modes!r}")
