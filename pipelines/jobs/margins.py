@@ -159,8 +159,9 @@ def write_margins(path, result: MarginResult) -> None:
         for name, data, units in (("speed_rpm", result.speeds_rpm, "rpm"),
                                   ("wing_amplitude", result.wing_amplitude_mm, "mm"),
                                   ("margin", result.margin, "1"),
-                                  ("unsafe", result.unsafe, "1 if the margin is below 1")):
+                                  ("unsafe", result.unsafe, "1")):
             group.create_dataset(name, data=data).attrs["units"] = units
+        group["unsafe"].attrs["description"] = "1 where the margin is below 1, else 0"
         group.attrs["limit_mm"] = np.nan if result.limit.limit_mm is None else result.limit.limit_mm
 
 
