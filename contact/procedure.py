@@ -360,8 +360,11 @@ class _Run:
         run_up = self.procedure.vibration_run_up
         return 1.0 if phase != "cof" or run_up <= 0 else min(1.0, t / run_up)
 
-    def phase(self, phase_index, phase, n_cycles, effects, checkpoint, checkpoint_every) -> bool:
-        """Run the cycles of one phase; True when the run stops early (shakedown or loosening)."""
+    def phase(self, phase_index, phase, n_cycles, effects, checkpoint, checkpoint_every, last=True) -> bool:
+        """Run the cycles of one phase; True when the run stops early (shakedown or loosening).
+        last: no phase follows it, so its last cycle writes no checkpoint (the run ends there);
+        the last cycle of an earlier phase does (a run interrupted in the wear phase resumed
+        from the COF phase's last checkpoint before it, up to a whole phase lost; QA, 2026-11-28)."""
         resuming = phase_index == self.first_phase and self.done_in_phase > 0
         if not resuming:
             self.quiet_cycles = 0
@@ -392,7 +395,7 @@ class _Run:
             self.observer.cycle(summary)
             if checkpoint_every and self.cycle_number % checkpoint_every == 0:
                 self.solver.at_checkpoint()
-                if checkpoint is not None and not (self.stationary or loosening or count + 1 == n_cycles):
+                if checkpoint is not None and not (self.stationary or loosening or (last and count + 1 == n_cycles)):
                     checkpoint(self.snapshot(phase_index, count + 1))
             if self.stationary or loosening:
                 return True
@@ -476,7 +479,8 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
         for phase_index, (phase, n_cycles, effects) in enumerate(phases):
             if phase_index < current.first_phase or n_cycles <= 0:
                 continue
-            stopped_early = current.phase(phase_index, phase, n_cycles, effects, checkpoint, checkpoint_every)
+            last = not any(n > 0 for _, n, _ in phases[phase_index + 1:])
+            stopped_early = current.phase(phase_index, phase, n_cycles, effects, checkpoint, checkpoint_every, last)
             if current.stationary:
                 break
     except RunStopped:

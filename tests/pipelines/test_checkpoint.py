@@ -103,6 +103,25 @@ def test_a_twice_resumed_file_is_the_uninterrupted_file(coarse_cylinder, tmp_pat
     assert resumed.read_bytes() == reference.read_bytes()
 
 
+def test_the_last_cycle_of_the_cof_phase_is_a_checkpoint_to_resume_from(coarse_cylinder, tmp_path, monkeypatch):
+    """3 COF and 4 wear cycles, a checkpoint every 3: the COF phase's last cycle writes one (it
+    did not, so a run interrupted in the wear phase went back to the checkpoint before it; QA,
+    2026-11-28), and the run resumed from it is the uninterrupted one to the byte."""
+    text = (coarse_cylinder.read_text().replace("cof_cycles = 0", "cof_cycles = 3")
+            .replace("wear_cycles = 2 ", "wear_cycles = 4 ")
+            .replace("wear_cap = 2.0e-4", "wear_cap = 2.0e-4\ncheckpoint_every = 3"))
+    assert "cof_cycles = 3" in text and "wear_cycles = 4 " in text
+    scene = tmp_path / "phases.toml"
+    scene.write_text(text)
+    reference = run_scene(scenes.load(scene), tmp_path / "reference", progress=False, plots=False).results_path
+    folder = tmp_path / "resumed"
+    _stopped_at(scene, folder, 3, monkeypatch)  # the checkpoint of cycle 3, the COF phase's last
+    resumed = run_scene(scenes.load(scene), folder, progress=False, plots=False, resume=True).results_path
+    assert resumed.read_bytes() == reference.read_bytes()
+    with h5py.File(resumed) as file:
+        assert list(file["cycles/phase"][()]) == [1, 1, 1, 2, 2, 2, 2]
+
+
 def test_a_changed_base_scene_refuses_the_checkpoint(coarse_cylinder, tmp_path, monkeypatch):
     """The checkpoint keeps the scene resolved: a value changed in the base file the scene extends
     is refused as a changed scene file is, naming the key; a comment added to it is not a change."""
