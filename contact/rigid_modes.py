@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from reduction.coupling import rigid_body_matrix
+from reduction.errors import listed
 
 #: Relative tolerance on the singular values of H (rows of unit length). A support spread over a
 #: fraction f of the extent gives a singular value of order f, a missing one of order 1e-16·√rows.
@@ -116,12 +117,12 @@ def describe(free: np.ndarray, frame: Frame) -> str:
     if combined.shape[0] == 1:
         axis = _rotation_axis(combined[0], frame)
         if axis is not None:
-            return _listed(words + [axis])
+            return listed(words + [axis])
     if combined.shape[0]:
         involved = [names[m] for m in np.flatnonzero(~pure & (share > NO_SHARE))]
         count = "a combination" if combined.shape[0] == 1 else f"{combined.shape[0]} combinations"
-        words.append(f"{count} of {_listed(involved)}")
-    return _listed(words)
+        words.append(f"{count} of {listed(involved)}")
+    return listed(words)
 
 
 def holding_components(free: np.ndarray, dim: int) -> tuple[list[str], list[str]]:
@@ -159,7 +160,3 @@ def _rotation_axis(motion: np.ndarray, frame: Frame) -> str | None:
 
 def _point(point: np.ndarray) -> str:
     return "(" + ", ".join(f"{value:.4g}" for value in np.where(np.abs(point) < 1e-9, 0.0, point)) + ")"
-
-
-def _listed(words: list[str]) -> str:
-    return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]

@@ -19,7 +19,7 @@ from mbs.model import reduce_bodies
 from mbs.parameters import ModelParams
 from mbs.sweep import SweepResult, collect_sweep, run_speed, write_sweep
 from pipelines.parallel import map_cases
-from reduction.errors import InputError
+from reduction.errors import InputError, listed
 
 SWEEP_FILE = "sweep.h5"
 
@@ -123,8 +123,7 @@ def check_resolution(model_params: ModelParams, speeds) -> list[str]:
 
 
 def _speeds(resolutions) -> str:
-    speeds = [f"{r.speed_rpm:g}" for r in resolutions]
-    return speeds[0] if len(speeds) == 1 else ", ".join(speeds[:-1]) + " and " + speeds[-1]
+    return listed([f"{r.speed_rpm:g}" for r in resolutions])
 
 
 def speed_sweep(model_params: ModelParams, speeds, *, path=None, progress: bool = False,
