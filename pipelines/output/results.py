@@ -87,6 +87,8 @@ from reduction.errors import InputError
 
 FORMAT = "fretwork-results"
 FORMAT_VERSION = 1
+#: the units of a contact area (of the points, or of the master surface's nodes)
+AREA_UNITS = "mm^2 (mm per unit thickness in 2D)"
 FIELD_UNITS = {
     "pressure": "MPa", "shear": "MPa", "cof": "1", "max_utilised_cof": "1", "max_shear": "MPa",
     "status": "code",
@@ -192,7 +194,7 @@ class ResultsWriter(Observer):
         pairing = model.assembly.pairing
         points = root.create_group("points")
         for name, data, units in (("coordinates", pairing.slave.coordinates, "mm"),
-                                  ("area", pairing.area, "mm^2 (mm per unit thickness in 2D)"),
+                                  ("area", pairing.area, AREA_UNITS),
                                   ("normal", pairing.normal, "1"),
                                   ("initial_overclosure", pairing.initial_overclosure, "mm"),
                                   ("facets", pairing.slave.facets, "index")):
@@ -396,7 +398,7 @@ class ResultsWriter(Observer):
         master = self.model.assembly.pairing.master
         surface = self.file.create_group("master_surface")
         for name, data, units in (("coordinates", master.coordinates, "mm"),
-                                  ("area", master.area, "mm^2 (mm per unit thickness in 2D)"),
+                                  ("area", master.area, AREA_UNITS),
                                   ("facets", master.facets, "index")):
             surface.create_dataset(name, data=data).attrs["units"] = units
         self.file["final"].create_dataset("master_wear_depth", data=depth).attrs["units"] = "mm"

@@ -52,7 +52,7 @@ from contact.solver import ContactSolver
 from pipelines import scene as scenes
 from pipelines.build import build
 from pipelines.coupling import multibody_loading
-from pipelines.output.results import FIELD_UNITS, STATUS_NAMES
+from pipelines.output.results import AREA_UNITS, FIELD_UNITS, STATUS_NAMES
 from reduction.errors import InputError
 
 
@@ -62,7 +62,6 @@ FORMAT = "fretwork-constant-cof"
 FORMAT_VERSION = 1
 #: The per-point fields of each model written to the file.
 MODEL_FIELDS = ("max_shear", "max_utilised_cof", "cof", "dissipation_in_cycle", "status")
-AREA_UNITS = "mm^2 (mm per unit thickness in 2D)"
 
 #: How far a probe may lie from the contact point it is read at, in local spacings of the contact
 #: points (the distance from that point to its nearest neighbour: the element size there). Within
@@ -222,7 +221,7 @@ def write_comparison(comparison: Comparison, path: str | Path) -> Path:
         for model in comparison.models:
             group = file.create_group(f"models/{model.key}")
             group.attrs.update(name=model.name, cof_evolution=model.cof_evolution, cycle=model.cycle,
-                               verdict=model.verdict, figures=json.dumps(model.figures, default=_plain),
+                               verdict=model.verdict, figures=json.dumps(model.figures),
                                scene_toml=model.scene_toml)
             for name in MODEL_FIELDS:
                 group.create_dataset(name, data=getattr(model, name)).attrs["units"] = FIELD_UNITS[name]
@@ -237,9 +236,3 @@ def write_comparison(comparison: Comparison, path: str | Path) -> Path:
             probes.create_dataset(name, data=data).attrs["units"] = units
     os.replace(part, path)
     return path
-
-
-def _plain(value):
-    """A figure JSON can hold: numpy scalars and arrays as numbers and lists."""
-    return value.tolist() if hasattr(value, "tolist") else str(value)
-
