@@ -208,26 +208,29 @@ def _abaqus_base_types(path: Path, label: str) -> io.StringIO:
 
 #: Abaqus plane-stress elements: meshio reads them as the plane-strain ones' cells
 _PLANE_STRESS = ("CPS3", "CPS4", "CPS4R")
+_PLANE_STRAIN = frozenset(kind for kind in ABAQUS_SOLIDS if kind.startswith("CPE"))
+#: meshio's cell types of 2D elements (of solids, shells, membranes or rigid surfaces alike)
+_CELLS_2D = frozenset({"triangle", "quad", "triangle6", "quad8", "quad9"})
 
 
 def _refuse_non_plane_strain(text: str, label: str) -> None:
     """InputError for a 2D Abaqus mesh (no C3D solids) whose elements are not plane-strain
-    solids: plane-stress elements, whose bodies are softer (E against E/(1 − ν²)), or shells,
-    membranes and rigid elements that meshio reads as the same triangles and quads. fretwork's
-    2D bodies are plane strain; read as such, they gave a plane-strain answer without a word."""
-    found = [(match.group(2).upper(), text.count("\n", 0, match.start()) + 1)
-             for match in _ABAQUS_ELEMENT.finditer(text)]
-    if any(kind.startswith("C3D") for kind, _ in found):
+    solids: plane-stress elements, whose bodies are softer (E against E/(1 − ν²)), or, in a
+    mesh with no plane-strain element, shells, membranes and rigid elements that meshio reads as
+    the same triangles and quads. fretwork's 2D bodies are plane strain; read as such, they gave
+    a plane-strain answer without a word."""
+    found = [(match.group(2).upper(), match.start()) for match in _ABAQUS_ELEMENT.finditer(text)]
+    kinds = {kind for kind, _ in found}
+    if any(kind.startswith("C3D") for kind in kinds):
         return  # a 3D mesh: other elements only give sets
-    plane_strain = {kind for kind in ABAQUS_SOLIDS if kind.startswith("CPE")}
-    cells_2d = {"triangle", "quad", "triangle6", "quad8", "quad9"}
-    for kind, line in found:
+    plane_strain = bool(kinds & _PLANE_STRAIN)
+    for kind, start in found:
+        line = text.count("\n", 0, start) + 1  # *ELEMENT lines are few: one a block
         if kind in _PLANE_STRESS:
             raise InputError(f"{label}: plane-stress element type {kind} (line {line}): fretwork's 2D bodies are "
                              "plane strain (CPE3, CPE4, CPE4R), which are stiffer; write the mesh with plane-strain "
                              "elements, or model the body in 3D")
-        if (kind not in plane_strain and meshio.abaqus._abaqus.abaqus_to_meshio_type.get(kind) in cells_2d
-                and not any(other in plane_strain for other, _ in found)):
+        if not plane_strain and meshio.abaqus._abaqus.abaqus_to_meshio_type.get(kind) in _CELLS_2D:
             raise InputError(f"{label}: element type {kind} (line {line}) is a shell, membrane or rigid element, "
                              "not a plane-strain solid; fretwork's 2D bodies are plane strain (CPE3, CPE4, CPE4R) "
                              "and its 3D ones solids (C3D4, C3D10, C3D8, C3D20)")
