@@ -11,6 +11,7 @@ in sub-steps. History variables advance only from converged sub-steps.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -179,6 +180,12 @@ class ContactSolver:
         # kilometres away instead of reporting the loss of tangential equilibrium.
         self.control_stiffness = space.Sq - self.rigid_modes @ (self.rigid_modes.T @ space.Sq
                                                                 @ self.rigid_modes) @ self.rigid_modes.T
+
+    @cached_property
+    def _mode_images(self) -> np.ndarray:
+        """(n_points, dim, k): what each rigid mode of the free control DOFs moves each point by
+        (E·modes, normal then tangential rows), for the contact search and the friction check."""
+        return (self.space.E @ self.rigid_modes).reshape(self.n_points, self.dim, self.rigid_modes.shape[1])
 
     def forget_cached_factorisations(self) -> None:
         """Drop the factorisations the linear solver keeps across increments (at a checkpoint,
@@ -363,8 +370,7 @@ class ContactSolver:
         drive-following predictor, one point is left nearest, and every cut-back sub-step
         scales the bending without changing which point that is."""
         nearest = penetration >= penetration.max() - 1e-9
-        modes = self.rigid_modes.shape[1]
-        images = (self.space.E @ self.rigid_modes).reshape(self.n_points, self.dim, modes)
+        images = self._mode_images
         order = np.argsort(-penetration, kind="stable")
         held = np.cumsum(np.einsum("pdi,pdj->pij", images[order], images[order]), axis=0)
         # the rank of the modes' images on the first k points, k = 1 … n (Gram eigenvalues)
@@ -622,7 +628,7 @@ class ContactSolver:
         carries the same share) and above the least possible one otherwise."""
         closed = response.status != Status.OPEN
         modes = self.rigid_modes
-        images = (self.space.E @ modes).reshape(self.n_points, self.dim, modes.shape[1])[closed]
+        images = self._mode_images[closed]
         load = modes.T @ f_q
         normal = images[:, 0, :].T @ (self.area[closed] * response.pressure[closed])
         demand = -load - normal  # what the shear forces must carry: E·modes carries λ to the modes
