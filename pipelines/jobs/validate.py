@@ -127,8 +127,7 @@ def check_energy(scene_path, overrides, cycles, increments) -> list[dict]:
     worn_area = float(np.sum(result.state.gap * area))
     w_total = sum(model.law.wear_coefficients)
     last = result.cycles[-1]
-    centre = np.argmin(np.abs(model.assembly.pairing.slave.coordinates[:, 0]))
-    slip_amplitude = 0.5 * last.slip_range[centre] + model.law.critical_slip
+    slip_amplitude = centre_stroke(model, result)
     cycle_dissipation = float(np.sum(last.dissipation_in_cycle * area))
     return [
         record("cylinder_on_plane/energy", "worn area / (w x global dissipation)", worn_area,
@@ -275,6 +274,25 @@ def check_mortar_patch(scene_path, overrides, pairing="mortar") -> list[dict]:
 SLIDING_ELEMENT = 0.1
 
 
+def centre_stroke(model, result) -> float:
+    """The relative sliding amplitude δ at the contact's centre in the last cycle, mm: half its
+    slip range (irreversible) plus the elastic slip γ_crit."""
+    centre = np.argmin(np.abs(model.assembly.pairing.slave.coordinates[:, 0]))
+    return 0.5 * float(result.cycles[-1].slip_range[centre]) + model.law.critical_slip
+
+
+def sliding_run(model, mode: str = "finite"):
+    """The procedure of ``model`` with wear (COF constant) on a :class:`SlidingSolver` in
+    ``mode``, an energy meter following its re-pairings: (solver, result, the dissipation
+    measured globally, mJ)."""
+    solver = SlidingSolver(model.assembly, model.law, model.settings, mode=mode)
+    meter = EnergyMeter(solver.space, model.law)
+    solver.listeners.append(meter.follow)
+    result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
+                           cof_evolution=False, wear=True, observer=MeterObserver(meter))
+    return solver, result, meter.global_dissipation
+
+
 def worn_width(x, depth) -> float:
     """Distance between the outermost nodes worn deeper than 0.1 % of the deepest, mm."""
     worn = x[depth > 1e-3 * depth.max()]
@@ -289,11 +307,7 @@ def check_finite_sliding(scene_path, overrides, cycles, increments, out_dir: Pat
         "bodies.plane.mesh.contact_size": SLIDING_ELEMENT, "contact.sliding": mode,
         "motions": [{"name": "tangential", "dof": "cylinder.rp.ux", "value": 0.53, "history": "cyclic"}],
         "procedure.wear_cycles": cycles, "procedure.cycle_jump": 1.0, "procedure.increments_per_cycle": increments}))
-    solver = SlidingSolver(model.assembly, model.law, model.settings, mode=mode)
-    meter = EnergyMeter(solver.space, model.law)
-    solver.listeners.append(meter.follow)
-    result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
-                           cof_evolution=False, wear=True, observer=MeterObserver(meter))
+    solver, result, global_dissipation = sliding_run(model, mode)
     pairing = model.assembly.pairing
     x_cylinder, cylinder_depth = pairing.slave.coordinates[:, 0], result.state.wear_depth[0]
     if getattr(result.state, "master_wear", None) is None:  # never re-paired: the flat's wear is at the points
@@ -301,8 +315,7 @@ def check_finite_sliding(scene_path, overrides, cycles, increments, out_dir: Pat
     else:
         x_flat, flat_depth = pairing.master.coordinates[:, 0], result.state.master_wear
     cylinder, flat = worn_width(x_cylinder, cylinder_depth), worn_width(x_flat, flat_depth)
-    centre = np.argmin(np.abs(x_cylinder))
-    stroke = 0.5 * float(result.cycles[-1].slip_range[centre]) + model.law.critical_slip  # irreversible + elastic
+    stroke = centre_stroke(model, result)
     worn = sum(worn_volumes(solver.pairing, result.state))
     a, _ = hertz_reference()
     _scar_figure(x_cylinder, cylinder_depth, x_flat, flat_depth, a, stroke, out_dir)
@@ -317,7 +330,7 @@ def check_finite_sliding(scene_path, overrides, cycles, increments, out_dir: Pat
     return [record(case, "cylinder scar width vs 2a [mm]", cylinder, 2.0 * a, 0.04),
             record(case, "flat scar width vs cylinder's + 2 x stroke [mm]", flat, cylinder + 2.0 * stroke, 0.015),
             record(case, "worn area / (w x global dissipation)", worn,
-                   sum(model.law.wear_coefficients) * meter.global_dissipation, 0.005)]
+                   sum(model.law.wear_coefficients) * global_dissipation, 0.005)]
 
 
 def _scar_figure(x_cylinder, cylinder_depth, x_flat, flat_depth, a, stroke, out_dir: Path) -> None:

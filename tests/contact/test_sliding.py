@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from contact import procedure
-from contact.energy import EnergyMeter, MeterObserver
+from contact.energy import EnergyMeter
 from contact.sliding import SlidingSolver, SlidingState, master_wear_at_points, worn_volumes
 from contact.solver import Effects
 from contact.verdict import Ending
@@ -24,7 +24,7 @@ from pipelines import scene as scenes
 from pipelines.build import build
 from pipelines.output.checkpoint import _read_state, _write_state
 from pipelines.jobs.run import run_scene
-from pipelines.jobs.validate import worn_width  # the scar width `fretwork validate` measures too
+from pipelines.jobs.validate import centre_stroke, sliding_run, worn_width  # as `fretwork validate`
 from reduction.threads import single_threaded_blas
 
 SCENE = str(Path(__file__).resolve().parents[2] / "examples" / "gross_slip_fretting.toml")
@@ -40,18 +40,7 @@ def one_blas_thread():
 
 def _run(mode, overrides=None):
     model = build(scenes.load(SCENE, {"contact.sliding": mode, **(overrides or {})}))
-    solver = SlidingSolver(model.assembly, model.law, model.settings, mode=mode)
-    meter = EnergyMeter(solver.space, model.law)
-    solver.listeners.append(meter.follow)
-    result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
-                           cof_evolution=False, wear=True, observer=MeterObserver(meter))
-    return model, solver, result, meter.global_dissipation
-
-
-def _stroke(model, result):
-    """Relative sliding amplitude δ at the contact centre, mm (irreversible + elastic slip)."""
-    centre = np.argmin(np.abs(model.assembly.pairing.slave.coordinates[:, 0]))
-    return 0.5 * float(result.cycles[-1].slip_range[centre]) + model.law.critical_slip
+    return (model, *sliding_run(model, mode))
 
 
 @pytest.fixture(scope="module")
@@ -59,12 +48,12 @@ def finite():
     return _run("finite")
 
 
-def test_gross_slip_scar_of_the_flat_is_wider_by_twice_the_stroke(finite):
+def test_gross_slip_scar_of_the_flat_is_wider_by_twice_thecentre_stroke(finite):
     model, solver, result, _ = finite
     pairing = model.assembly.pairing
     cylinder = worn_width(pairing.slave.coordinates[:, 0], result.state.wear_depth[0])
     flat = worn_width(pairing.master.coordinates[:, 0], result.state.master_wear)
-    stroke = _stroke(model, result)
+    stroke = centre_stroke(model, result)
     assert 0.4 < stroke < 0.6  # comparable to the contact half-width a = 1.28 mm
     assert cylinder == pytest.approx(2 * 1.2833, abs=2 * ELEMENT)
     assert abs(flat - (cylinder + 2 * stroke)) < ELEMENT
@@ -77,7 +66,7 @@ def test_small_sliding_cannot_widen_the_flat_scar():
     x = model.assembly.pairing.slave.coordinates[:, 0]
     widths = [worn_width(x, depth) for depth in result.state.wear_depth]
     assert widths[1] == pytest.approx(widths[0], abs=1e-9)
-    assert widths[1] < widths[0] + 2 * _stroke(model, result) - 5 * ELEMENT
+    assert widths[1] < widths[0] + 2 * centre_stroke(model, result) - 5 * ELEMENT
 
 
 def test_worn_volumes_follow_the_wear_coefficients(finite):

@@ -15,13 +15,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from contact import procedure
-from contact.energy import EnergyMeter, MeterObserver
 from contact.law import ContactState
-from contact.sliding import SlidingSolver, worn_volumes
+from contact.sliding import worn_volumes
 from contact.verdict import wear_figures
 from pipelines import scene as scenes
 from pipelines.build import build
+from pipelines.jobs.validate import sliding_run
 from reduction.threads import single_threaded_blas
 
 SCENE = str(Path(__file__).resolve().parents[2] / "examples" / "gross_slip_fretting.toml")
@@ -66,12 +65,7 @@ def long_stroke():
     with single_threaded_blas():
         model = build(scenes.load(SCENE, {"contact.sliding": "finite", "motions": [
             {"name": "tangential", "dof": "cylinder.rp.ux", "value": STROKE, "history": "cyclic"}]}))
-        solver = SlidingSolver(model.assembly, model.law, model.settings, mode="finite")
-        meter = EnergyMeter(solver.space, model.law)
-        solver.listeners.append(meter.follow)
-        result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
-                               cof_evolution=False, wear=True, observer=MeterObserver(meter))
-    return model, solver, result, meter.global_dissipation
+        return (model, *sliding_run(model, "finite"))
 
 
 def test_each_body_wears_its_coefficient_times_the_dissipation(long_stroke):
