@@ -60,14 +60,19 @@ def _triangulation(coordinates: np.ndarray, facets: np.ndarray, a: int, b: int) 
     return matplotlib.tri.Triangulation(coordinates[:, a], coordinates[:, b], corners)
 
 
+def _probe_at(ax, x: float, name: str) -> None:
+    """A probe on a profile: a dotted vertical line at ``x``, named at its top."""
+    ax.axvline(x, color="0.3", lw=0.8, ls=":")
+    ax.annotate(name, (x, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -10),
+                textcoords="offset points", fontsize=8)
+
+
 def _mark_probes(ax, comparison, a: int, b: int | None = None) -> None:
     """Each probe's contact point marked and named: a cross on a map, a dotted line on a profile."""
     for probe in comparison.probes:
         x = probe.position_mm[a]
         if b is None:
-            ax.axvline(x, color="0.3", lw=0.8, ls=":")
-            ax.annotate(probe.name, (x, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -10),
-                        textcoords="offset points", fontsize=8)
+            _probe_at(ax, x, probe.name)
             continue
         y = probe.position_mm[b]
         ax.plot(x, y, marker="X", ms=8, mfc="white", mec="black", mew=1.0)
@@ -177,10 +182,7 @@ def _line_panel(ax, comparison, mesh, axes: tuple, line: tuple) -> None:
     for probe in comparison.probes:
         offset = np.asarray(probe.position_mm)[[a, b]] - start
         if abs(offset @ normal) <= 0.02 * length:
-            where = origin + sense * (offset @ direction)
-            ax.axvline(where, color="0.3", lw=0.8, ls=":")
-            ax.annotate(probe.name, (where, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -10),
-                        textcoords="offset points", fontsize=8)
+            _probe_at(ax, origin + sense * (offset @ direction), probe.name)
     ax.set_xlim(*sorted((origin, origin + sense * length)))
     ax.set_ylim(bottom=0.0)
     ax.set_ylabel(SHEAR_LABEL)
