@@ -20,7 +20,23 @@ import numpy as np
 CELL_TYPES = {2: "line", 3: "triangle", 4: "quad"}
 
 
-def _point_data(fields: h5py.Group, row: int | None) -> dict:
+#: a fields group up to this size (bytes) is read whole before a series is written from it
+_READ_WHOLE = 256 << 20
+
+
+def _loaded(fields: h5py.Group):
+    """Every dataset of a fields group read whole (a dict by name), so that the series slices
+    its rows in memory: one h5py read per row and field cost 0.23 ms of the cylinder's 2.9 ms
+    per increment. A group larger than ``_READ_WHOLE`` stays
+    on disk and is read row by row."""
+    if sum(dataset.nbytes for dataset in fields.values()) > _READ_WHOLE:
+        return fields
+    return {name: dataset[()] for name, dataset in fields.items()}
+
+
+def _point_data(fields, row: int | None) -> dict:
+    """Point data of one row of ``fields`` (an h5py group, or a mapping of arrays by name), or
+    of all of it (row None: the final fields)."""
     data = {}
     for name, dataset in fields.items():
         if name in ("cycle", "master_wear_depth"):  # the master's own field lives on its own surface
@@ -66,7 +82,7 @@ def write_interface_series(results_path: str | Path, out_path: str | Path) -> Pa
     """Write ``out_path`` (.xdmf, with its .h5 beside it) from a results file."""
     with h5py.File(results_path, "r") as file:
         points, cells = _surface(file)
-        fields = file["cycles/fields"]
+        fields = _loaded(file["cycles/fields"])
         cycles = file["cycles/cycle"][()]
         equivalent = dict(zip(cycles, file["cycles/equivalent_cycles"][()]))
         steps = [(float(equivalent.get(cycle, cycle)), _point_data(fields, row))
@@ -80,7 +96,8 @@ def write_increment_series(results_path: str | Path, out_path: str | Path) -> Pa
     with h5py.File(results_path, "r") as file:
         points, cells = _surface(file)
         group = file["increment_fields"]
-        steps = [(float(time), _point_data(group["fields"], row)) for row, time in enumerate(group["time"][()])]
+        fields = _loaded(group["fields"])
+        steps = [(float(time), _point_data(fields, row)) for row, time in enumerate(group["time"][()])]
     return _write_series(Path(out_path), points, cells, steps)
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from pipelines.cli.main import main
+from pipelines.output import paraview
 
 FIGURES = {"verdict", "stick_area_fraction", "slip_area_fraction", "damaged_area_fraction",
            "worn_area_fraction", "max_wear_depth_mm", "wear_volume_mm3", "dissipated_energy_mJ",
@@ -41,6 +42,15 @@ def test_run_prints_json_figures_and_writes_results(coarse_cylinder, tmp_path, c
         _, point_data, _ = reader.read_data(reader.num_steps - 1)
         total = wear.sum(axis=0)
         np.testing.assert_allclose(point_data["wear_depth_total"], total, rtol=1e-12, atol=1e-12 * total.max())
+    # a results file too large to read whole is read row by row, to the same series
+    monkeypatch.setattr(paraview, "_READ_WHOLE", 0)
+    paraview.write_interface_series(out / "results.h5", out / "by_row.xdmf")
+    with meshio.xdmf.TimeSeriesReader("by_row.xdmf") as reader:
+        reader.read_points_cells()
+        _, by_row, _ = reader.read_data(reader.num_steps - 1)
+    assert by_row.keys() == point_data.keys()
+    for name, value in point_data.items():
+        np.testing.assert_array_equal(by_row[name], value)
 
 
 def test_bad_scene_exits_2_with_message_and_writes_nothing(coarse_cylinder, tmp_path, capsys):
