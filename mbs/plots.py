@@ -86,9 +86,10 @@ def plot_campbell(campbell: Campbell, path, *, operating_rpm: float | None = Non
     f_max = 1.15 * campbell.frequencies.max()
     if campbell.system_frequencies is not None:
         system = campbell.system_frequencies
-        for mode in range(system.shape[1]):
+        found = np.flatnonzero(np.isfinite(system).any(axis=0))  # a mode no speed found is no line
+        for mode in found:
             ax.plot(campbell.speeds_rpm, system[:, mode], "-", color="0.6", lw=0.8,
-                    label=f"coupled multibody model modes ({system.shape[1]})" if mode == 0 else None)
+                    label=f"coupled multibody model modes ({found.size})" if mode == found[0] else None)
     crossing = _crossing_orders(campbell)
     quiet = [order for order in campbell.orders if order not in crossing]
     grouped = len(campbell.orders) > 6 and len(quiet) > 1

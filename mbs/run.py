@@ -58,8 +58,11 @@ def run_model(params: ModelParams, out_dir, *, bodies: tuple | None = None,
     system = [system_eigenfrequencies(replace(params, speed_rpm=float(s)), reduced, max_frequency=np.inf,
                                       reduced_throw=reduced_throw)[:N_SYSTEM_MODES]
               for s in speeds]
-    n_common = min(len(f) for f in system)
-    campbell = campbell_diagram(reduced, speeds, orders, system_frequencies=np.array([f[:n_common] for f in system]))
+    # as the sweep holds them: one column per mode, NaN at a speed where the solve found fewer
+    system_frequencies = np.full((len(system), max(len(f) for f in system)), np.nan)
+    for row, frequencies in zip(system_frequencies, system):
+        row[:len(frequencies)] = frequencies
+    campbell = campbell_diagram(reduced, speeds, orders, system_frequencies=system_frequencies)
     results_file = write_run(out_dir / "run.h5", params, reduced, histories, spectra, campbell)
     shaft_hz = params.speed_rpm / 60.0
     f_max = 1.25 * max(reduced.eigenfrequencies.max(), (orders.max() if orders.size else 0.0) * shaft_hz)

@@ -1,6 +1,7 @@
 """The multibody plots: µm on the axes, the time history over the steady window the wing
 amplitude is measured on, a Campbell diagram whose legend names every line kind."""
 
+from dataclasses import replace
 import re
 
 import matplotlib.pyplot as plt
@@ -106,3 +107,16 @@ def test_a_few_engine_orders_each_get_their_own_legend_entry(figures):
     assert [label for label in labels if label.startswith("engine order")] == [
         "engine order 0.5 (f = 0.5 · rpm / 60)", "engine order 1 (f = 1 · rpm / 60)",
         "engine order 30 (f = 30 · rpm / 60)"]
+
+
+def test_the_campbell_legend_counts_the_coupled_modes_that_were_found(figures):
+    # as a sweep stores them: one column per mode, NaN where a speed's solve found fewer; a
+    # column no speed found is not a mode (`mbs` and `sweep` counted 23 and 24 of one model)
+    diagram = campbell([0.5, 1.0, 30.0])
+    system = np.full((10, 4), np.nan)
+    system[:, :2] = diagram.system_frequencies
+    system[3:, 2] = 500.0  # found at the higher speeds only
+    plots.plot_campbell(replace(diagram, system_frequencies=system), "unused.png")
+    ax = figures[0].axes[0]
+    assert "coupled multibody model modes (3)" in [text.get_text() for text in ax.get_legend().get_texts()]
+    assert sum(line.get_color() == "0.6" for line in ax.get_lines()) == 3
