@@ -30,6 +30,7 @@ Units: mm, N, MPa, t, s.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +38,7 @@ import scipy.linalg
 import scipy.sparse as sp
 import skfem
 
+from mbs.refusal import Refusal, refuse
 from reduction.elasticity import ElasticBody, assemble_elastic_body
 from reduction.errors import InputError
 from reduction.mesh.generators import cells_inside, counterweight_solids
@@ -75,27 +77,36 @@ class CounterweightGeometry:
     mesh_digest: str | None = None
 
     def validate(self) -> None:
+        """Raise :class:`mbs.refusal.Refusal` for the first value the model cannot use."""
         if self.mesh_file is not None:
             if not self.interface:
-                raise InputError("counterweight mesh_file needs 'interface': the node set or surface of "
-                                 "the file that is the bolted contact face")
-            for name in ("youngs_modulus", "density"):
-                if getattr(self, name) <= 0:
-                    raise InputError(f"counterweight {name} must be positive, got {getattr(self, name)}")
-            return
-        positive = ("width", "height", "thickness", "hub_width", "hub_height", "youngs_modulus", "density")
+                raise Refusal(("counterweight.mesh_file",), (self.mesh_file,),
+                              "needs 'interface': the node set or surface of the file that is the bolted contact face")
+            positive = ("youngs_modulus", "density")
+        else:
+            positive = ("width", "height", "thickness", "hub_width", "hub_height", "youngs_modulus", "density")
         for name in positive:
-            if getattr(self, name) <= 0:
-                raise InputError(f"counterweight {name} must be positive, got {getattr(self, name)}")
-        if not self.hub_width < self.width:
-            raise InputError("counterweight hub_width must be smaller than width (the wings need an overhang)")
-        if not self.hub_height < self.height:
-            raise InputError("counterweight hub_height must be smaller than height")
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise refuse(f"counterweight.{name}", value, f"must be positive ({_UNITS.get(name, 'mm')})")
+        if self.mesh_file is not None:
+            return
+        for small, large, why in (("hub_width", "width", ": the wings need an overhang"), ("hub_height", "height", "")):
+            if not getattr(self, small) < getattr(self, large):
+                raise Refusal((f"counterweight.{small}", f"counterweight.{large}"),
+                              (getattr(self, small), getattr(self, large)),
+                              f"{small} ({getattr(self, small):g} mm) must be smaller than {large} "
+                              f"({getattr(self, large):g} mm){why}")
         for name in ("elements_x", "elements_y", "elements_z"):
             if getattr(self, name) < 1:
-                raise InputError(f"counterweight {name} must be at least 1")
+                raise refuse(f"counterweight.{name}", getattr(self, name), "must be at least 1 (mesh cells)")
         if self.elements_z % 2:
-            raise InputError("counterweight elements_z must be even so that the wing-tip nodes lie on the mid-plane")
+            raise refuse("counterweight.elements_z", self.elements_z,
+                         "must be even, so that the wing-tip nodes lie on the mid-plane")
+
+
+#: units of the CounterweightGeometry fields that are not lengths (mm)
+_UNITS = {"youngs_modulus": "MPa", "density": "t/mm³"}
 
 
 @dataclass(frozen=True)

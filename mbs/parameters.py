@@ -16,10 +16,19 @@ import numbers
 from dataclasses import dataclass, field
 
 from mbs.counterweight import CounterweightGeometry
-from reduction.errors import InputError
+from mbs.refusal import Refusal, refuse
+from reduction.errors import listed
 
 #: The effects a scene can switch on; code for an effect that is off is not run.
 KNOWN_EFFECTS = frozenset({"gas_torque", "gear_mesh", "torsional_vibration", "flexible_crankshaft"})
+
+
+def _whole(value) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def _positive(value) -> bool:
+    return math.isfinite(value) and value > 0
 
 
 @dataclass(frozen=True)
@@ -74,6 +83,14 @@ class CrankThrowParams:
     poisson_ratio: float = 0.3
     flexible_modes: int = 8
 
+    def validate(self) -> None:
+        """Raise :class:`mbs.refusal.Refusal` for a value the model cannot use (only the mode count
+        is checked: the throw's sizes are the user's to choose)."""
+        if not _whole(self.flexible_modes) or self.flexible_modes < 1:
+            # said here, with its key, not by the throw's reduction after the run started
+            raise refuse("throw.flexible_modes", self.flexible_modes,
+                         "must be a whole number of at least 1 (fixed-interface modes per throw body)")
+
     @property
     def web_center_z(self) -> float:
         """Axial position of the web mid-planes (+/-), mm."""
@@ -117,14 +134,18 @@ class ExcitationParams:
     flywheel_inertia: float = 2.0e5
 
     def validate(self) -> None:
-        n = len(self.gas_orders)
-        if len(self.gas_torque_amplitudes) != n or len(self.gas_torque_phases) != n:
-            raise InputError("excitation gas_orders, gas_torque_amplitudes and gas_torque_phases "
-                             "must have the same length (one row of the order table each)")
-        if any(order <= 0 for order in self.gas_orders):
-            raise InputError("excitation gas_orders must be positive multiples of shaft speed")
-        if self.gear_teeth < 1:
-            raise InputError(f"excitation gear_teeth must be at least 1, got {self.gear_teeth}")
+        """Raise :class:`mbs.refusal.Refusal` for the first value the model cannot use."""
+        table = ("gas_orders", "gas_torque_amplitudes", "gas_torque_phases")
+        lengths = [len(getattr(self, name)) for name in table]
+        if len(set(lengths)) > 1:
+            raise Refusal(tuple(f"excitation.{name}" for name in table), tuple(getattr(self, name) for name in table),
+                          "must have the same length, one row of the order table each (lengths "
+                          f"{', '.join(map(str, lengths))})")
+        if not all(order > 0 for order in self.gas_orders):
+            raise refuse("excitation.gas_orders", self.gas_orders, "must all be positive (multiples of shaft speed)")
+        if not _whole(self.gear_teeth) or self.gear_teeth < 1:
+            raise refuse("excitation.gear_teeth", self.gear_teeth,
+                         "must be a whole number of at least 1 (teeth of the crank gear)")
 
 
 @dataclass(frozen=True)
@@ -154,14 +175,17 @@ class SolverParams:
     ramp_revolutions: float = 0.5
 
     def validate(self) -> None:
-        if self.time_step <= 0 or self.revolutions <= 0:
-            raise InputError("solver time_step and revolutions must be positive")
-        if self.ramp_revolutions < 0:
-            raise InputError("solver ramp_revolutions must not be negative")
+        """Raise :class:`mbs.refusal.Refusal` for the first value the model cannot use."""
+        for name, unit in (("time_step", "s"), ("revolutions", "shaft revolutions")):
+            if not _positive(getattr(self, name)):
+                raise refuse(f"solver.{name}", getattr(self, name), f"must be positive ({unit})")
+        if not (math.isfinite(self.ramp_revolutions) and self.ramp_revolutions >= 0):
+            raise refuse("solver.ramp_revolutions", self.ramp_revolutions,
+                         "must not be negative (shaft revolutions; 0: full excitation from t = 0)")
         if not 0.0 <= self.spectral_radius <= 1.0:
-            raise InputError("solver spectral_radius must lie in [0, 1]")
+            raise refuse("solver.spectral_radius", self.spectral_radius, "must lie in [0, 1] (1: no numerical damping)")
         if self.drive not in ("constant_speed", "free"):
-            raise InputError(f"solver drive must be 'constant_speed' or 'free', got {self.drive!r}")
+            raise refuse("solver.drive", self.drive, 'must be "constant_speed" or "free"')
 
 
 @dataclass(frozen=True)
@@ -210,24 +234,30 @@ class ModelParams:
         return 2 * self.throws
 
     def validate(self) -> None:
-        if not isinstance(self.throws, int) or self.throws < 1:
-            raise InputError(f"throws must be a whole number of at least 1, got {self.throws!r}")
+        """Raise :class:`mbs.refusal.Refusal` for the first value the model cannot use, naming
+        its field ('n_modes', 'solver.time_step'), its value and what is allowed."""
+        if not _whole(self.throws) or self.throws < 1:
+            raise refuse("throws", self.throws, "must be a whole number of at least 1 (crank throws)")
         for name in ("crank_angles_deg", "firing_angles_deg"):
             table = getattr(self, name)
             if table is not None and len(table) != self.throws:
-                raise InputError(f"{name} must give one angle per throw ({self.throws}), got {len(table)}")
-        if self.speed_rpm <= 0:
-            raise InputError(f"engine speed_rpm must be positive, got {self.speed_rpm}")
-        if not isinstance(self.n_modes, numbers.Integral) or isinstance(self.n_modes, bool) or self.n_modes < 1:
+                raise Refusal((name, "throws"), (table, self.throws),
+                              f"{name} must give one angle per throw: {self.throws} angles, not {len(table)}")
+        if not _positive(self.speed_rpm):
+            raise refuse("speed_rpm", self.speed_rpm, "must be positive (engine speed, rpm)")
+        if not _whole(self.n_modes) or self.n_modes < 1:
             # said here, with its key, not by the Craig-Bampton reduction after the run started
-            raise InputError(f"the number of Craig-Bampton modes must be a whole number of at least 1, "
-                             f"got {self.n_modes!r}")
+            raise refuse("n_modes", self.n_modes,
+                         "must be a whole number of at least 1 (Craig-Bampton modes per counterweight)")
         unknown = set(self.effects) - KNOWN_EFFECTS
         if unknown:
-            raise InputError(f"unknown effects {sorted(unknown)}; known: {sorted(KNOWN_EFFECTS)}")
-        if self.modal_damping_ratio < 0:
-            raise InputError("modal_damping_ratio must not be negative")
+            raise refuse("effects", self.effects, f"may name only {listed(sorted(KNOWN_EFFECTS))}, not "
+                         f"{listed(sorted(unknown))}")
+        if not (math.isfinite(self.modal_damping_ratio) and self.modal_damping_ratio >= 0):
+            raise refuse("modal_damping_ratio", self.modal_damping_ratio,
+                         "must not be negative (damping ratio of every CW mode, a fraction of critical: 0.02 is 2 %)")
         self.counterweight.validate()
+        self.throw.validate()
         self.excitation.validate()
         self.solver.validate()
 

@@ -31,6 +31,7 @@ import numpy as np
 from mbs.counterweight import CounterweightGeometry
 from mbs.excitation import gas_torque_from_pressure
 from mbs.parameters import CrankThrowParams, ExcitationParams, ModelParams, SolverParams
+from mbs.refusal import Refusal, shown
 from reduction.errors import InputError
 
 _SUBTABLES = {
@@ -39,6 +40,14 @@ _SUBTABLES = {
     "excitation": ExcitationParams,
     "solver": SolverParams,
 }
+
+
+def _header(where: str, sub: str | None = None) -> str:
+    """The table header as the scene writes it: ``where`` ('[mbs]', or 'FILE: [mbs]') for the
+    top level, '[mbs.solver]' for a sub-table."""
+    if sub is None:
+        return where
+    return f"{where[:-1]}.{sub}]" if where.endswith("]") else f"{where}.{sub}"
 
 
 def _unknown(table: dict, allowed: set, where: str) -> str | None:
@@ -51,31 +60,66 @@ def _unknown(table: dict, allowed: set, where: str) -> str | None:
     return f"{where}: unknown key(s) {unknown}{hints}; allowed: {sorted(allowed)}"
 
 
-def _checked(table: dict, allowed: set, where: str) -> None:
-    problem = _unknown(table, allowed, where)
-    if problem:
-        raise InputError(problem)
-
-
 def _as_field_value(value):
     return tuple(value) if isinstance(value, list) else value
+
+
+def _number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+#: what a TOML value must be for a dataclass field of each annotation
+_KINDS = {
+    "float": (_number, "a number"),
+    "int": (lambda v: isinstance(v, int) and not isinstance(v, bool), "a whole number"),
+    "bool": (lambda v: isinstance(v, bool), "true or false"),
+    "str": (lambda v: isinstance(v, str), "a string"),
+    "str | None": (lambda v: isinstance(v, str), "a string"),
+    "tuple[float, ...]": (lambda v: isinstance(v, list) and all(map(_number, v)), "a list of numbers"),
+    "tuple[float, ...] | None": (lambda v: isinstance(v, list) and all(map(_number, v)), "a list of numbers"),
+    "frozenset": (lambda v: isinstance(v, list) and all(isinstance(e, str) for e in v), "a list of names"),
+}
+
+
+def _mistyped(table: dict, cls) -> dict[str, str]:
+    """The keys of ``table`` whose value is not of their ``cls`` field's kind, each with that kind."""
+    found = {}
+    for field in fields(cls):
+        check, kind = _KINDS.get(field.type, (None, None))
+        if field.name in table and check is not None and not check(table[field.name]):
+            found[field.name] = kind
+    return found
 
 
 _PRESSURE_KEYS = {"file", "bore", "conrod_length", "max_order"}
 
 
-def _with_pressure_curve(params: ModelParams, table: dict, folder: Path, where: str) -> ModelParams:
-    _checked(table, _PRESSURE_KEYS, where)
+def _pressure_problems(table, where: str) -> list[str]:
+    """The problems of a [mbs.gas_pressure] table that show without reading its file."""
+    if not isinstance(table, dict):
+        return [f"{where} must be a table (file, bore, conrod_length, max_order), got {shown(table)}"]
     missing = sorted({"file", "bore", "conrod_length"} - set(table))
-    if missing:
-        raise InputError(f"{where}: missing key(s) {missing}")
+    found = [_unknown(table, _PRESSURE_KEYS, where)] + ([f"{where}: missing key(s) {missing}"] if missing else [])
+    found += [f"{where} {key} = {shown(table[key])}: must be a positive number (mm)" if key != "max_order" else
+              f"{where} {key} = {shown(table[key])}: must be a positive number (highest engine order)"
+              for key in ("bore", "conrod_length", "max_order")
+              if key in table and not (_number(table[key]) and table[key] > 0)]
+    if "file" in table and not isinstance(table["file"], str):
+        found.append(f"{where} file = {shown(table['file'])}: must be a string (a CSV file)")
+    return [problem for problem in found if problem]
+
+
+def _with_pressure_curve(params: ModelParams, table: dict, folder: Path, where: str) -> ModelParams:
+    problems = _pressure_problems(table, where)
+    if problems:
+        raise InputError("; ".join(problems))
     path = folder / table["file"]
     try:
         curve = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
     except (OSError, ValueError) as error:
-        raise InputError(f"{where}: cannot read pressure curve {path}: {error}") from None
+        raise InputError(f"{where} file: cannot read pressure curve {path}: {error}") from None
     if curve.shape[1] != 2:
-        raise InputError(f"{where}: pressure curve {path} must have two columns (crank angle deg, pressure MPa)")
+        raise InputError(f"{where} file: pressure curve {path} must have two columns (crank angle deg, pressure MPa)")
     _, orders, amplitudes, phases = gas_torque_from_pressure(
         curve[:, 0], curve[:, 1], bore=float(table["bore"]), crank_radius=params.throw.crank_radius,
         conrod_length=float(table["conrod_length"]), max_order=float(table.get("max_order", 12.0)))
@@ -87,45 +131,47 @@ def _with_pressure_curve(params: ModelParams, table: dict, folder: Path, where: 
 def _with_mesh_digest(table: dict, folder: Path, where: str) -> dict:
     """The counterweight table with its mesh file made absolute and its SHA-256 (cache key) added."""
     if "mesh_digest" in table:
-        raise InputError(f"{where}: 'mesh_digest' is computed from the file, not given")
+        raise InputError(f"{where} mesh_digest: is computed from the mesh file, not given")
     path = Path(table["mesh_file"])
     path = path if path.is_absolute() else folder / path
+    named = f"{where} mesh_file = {shown(table['mesh_file'])}"
     if path.is_dir():
-        raise InputError(f"{where}: {path} is a folder, not a mesh file: name a mesh file in it "
+        raise InputError(f"{named}: {path} is a folder, not a mesh file: name a mesh file in it "
                          "(Abaqus .inp, Gmsh .msh)")
     if not path.is_file():
-        raise InputError(f"{where}: {path} does not exist")
+        raise InputError(f"{named}: {path} does not exist")
     return {**table, "mesh_file": str(path.resolve()), "mesh_digest": hashlib.sha256(path.read_bytes()).hexdigest()}
 
 
-def _field_values(table: dict, where: str, folder: Path | None) -> dict:
-    """The ModelParams fields an [mbs] table gives: a value per top-level field, a dict of values
-    per sub-table; unknown keys refused. With ``folder`` the counterweight's mesh file is made
+def _field_values(table: dict, where: str, folder: Path | None) -> tuple[dict, list[str]]:
+    """The ModelParams fields an [mbs] table gives (a value per top-level field, a dict of values
+    per sub-table), and the problems of the keys left out: unknown keys, values of the wrong kind,
+    a [mbs.gas_pressure] table's keys. With ``folder`` the counterweight's mesh file is made
     absolute and digested (:func:`_with_mesh_digest`); without it no file is read."""
     top_fields = {f.name for f in fields(ModelParams)}
-    # every table's unknown keys in one message, not the first table's alone
     problems = [_unknown(table, top_fields | {"gas_pressure"}, where)]
-    problems += [_unknown(value, {f.name for f in fields(_SUBTABLES[name])}, f"{where}.{name}")
-                 for name, value in table.items() if name in _SUBTABLES and isinstance(value, dict)]
-    problems = [problem for problem in problems if problem]
-    if problems:
-        raise InputError("; ".join(problems))
+    mistyped = _mistyped({k: v for k, v in table.items() if k not in _SUBTABLES}, ModelParams)
     values = {}
     for name, value in table.items():
+        sub = _header(where, name)
         if name == "gas_pressure":
-            continue
-        if name in _SUBTABLES:
-            if not isinstance(value, dict):
-                raise InputError(f"{where}.{name} must be a table")
-            _checked(value, {f.name for f in fields(_SUBTABLES[name])}, f"{where}.{name}")
+            problems += _pressure_problems(value, sub)
+        elif name in _SUBTABLES and not isinstance(value, dict):
+            problems.append(f"{where} {name} = {shown(value)}: must be a table, {sub.rpartition(': ')[2]}")
+        elif name in _SUBTABLES:
+            allowed = {f.name for f in fields(_SUBTABLES[name])}
+            problems.append(_unknown(value, allowed, sub))
+            wrong = _mistyped(value, _SUBTABLES[name])
+            problems += [f"{sub} {key} = {shown(value[key])}: must be {kind}" for key, kind in wrong.items()]
+            value = {k: v for k, v in value.items() if k in allowed and k not in wrong}
             if folder is not None and name == "counterweight" and "mesh_file" in value:
-                value = _with_mesh_digest(value, folder, f"{where}.counterweight.mesh_file")
+                value = _with_mesh_digest(value, folder, sub)
             values[name] = {k: _as_field_value(v) for k, v in value.items()}
-        elif name == "effects":
-            values[name] = frozenset(value) if isinstance(value, list) else value
-        else:
-            values[name] = _as_field_value(value)
-    return values
+        elif name in mistyped:
+            problems.append(f"{where} {name} = {shown(value)}: must be {mistyped[name]}")
+        elif name in top_fields:
+            values[name] = frozenset(value) if name == "effects" else _as_field_value(value)
+    return values, [problem for problem in problems if problem]
 
 
 def _params(values: dict) -> ModelParams:
@@ -133,77 +179,77 @@ def _params(values: dict) -> ModelParams:
                                      for name, value in values.items()})
 
 
-def _refusal(values: dict) -> str | None:
-    """Why ModelParams refuses these values (its first complaint), or None."""
-    try:
-        _params(values).validate()
-    except InputError as error:
-        return str(error)
-    except (TypeError, ValueError) as error:  # a string or list where a number belongs
-        return f"a value of the wrong type ({error})"
-    return None
+def _given(values: dict, field: str) -> bool:
+    """Whether ``values`` give a ModelParams field ('n_modes', 'solver.time_step')."""
+    name, _, key = field.partition(".")
+    return name in values and (not key or key in values[name])
 
 
-def _without(values: dict, key: tuple) -> dict:
-    """``values`` without one key: (field,) or (sub-table, field)."""
-    if len(key) == 1:
-        return {name: value for name, value in values.items() if name != key[0]}
-    return {**values, key[0]: {k: v for k, v in values[key[0]].items() if k != key[1]}}
+def _without(values: dict, field: str) -> dict:
+    """``values`` without one field ('n_modes', 'solver.time_step')."""
+    name, _, key = field.partition(".")
+    if not key:
+        return {k: v for k, v in values.items() if k != name}
+    return {**values, name: {k: v for k, v in values[name].items() if k != key}}
 
 
-def table_problems(values: dict) -> list[tuple[list[str], str]]:
-    """Every refusal of ModelParams, as (the dotted keys within [mbs] at fault, its reason).
-    ModelParams says why but not which key: at fault is a key that alone (the others at their
-    defaults) is refused for the same reason, or else, for a combination (crank_angles_deg of
-    another length than throws), each key whose default changes the answer. Each refusal's keys
-    are set aside before the next is sought."""
+def table_problems(values: dict) -> list[Refusal]:
+    """Every refusal of ModelParams (:class:`mbs.refusal.Refusal`), each with only the fields the
+    table gives: a refusal names the field refused and the fields its bound comes from, and of
+    those the table gives at least one (the defaults are valid together). Each refusal's fields
+    are set aside (back to their defaults) before the next is sought."""
     found = []
-    while (reason := _refusal(values)) is not None:
-        keys = [(name,) for name in values if name not in _SUBTABLES]
-        keys += [(name, key) for name in values if name in _SUBTABLES for key in values[name]]
-        culprits = ([key for key in keys if _refusal(_only(values, key)) == reason]
-                    or [key for key in keys if _refusal(_without(values, key)) != reason])
-        found.append(([".".join(key) for key in culprits], reason))
-        if not culprits:
-            break
-        for key in culprits:
-            values = _without(values, key)
-    return found
+    while True:
+        try:
+            _params(values).validate()
+            return found
+        except Refusal as refusal:
+            given = [(field, value) for field, value in zip(refusal.fields, refusal.values) if _given(values, field)]
+            found.append(Refusal(*zip(*given), refusal.allowed) if given else refusal)
+            if not given:
+                return found
+            for field, _ in given:
+                values = _without(values, field)
 
 
-def _only(values: dict, key: tuple) -> dict:
-    """One key of ``values``: (field,) or (sub-table, field)."""
-    return {key[0]: values[key[0]]} if len(key) == 1 else {key[0]: {key[1]: values[key[0]][key[1]]}}
+def _key(field: str, header: str) -> str:
+    """A ModelParams field as the scene writes it: 'n_modes' -> '[mbs] n_modes',
+    'solver.time_step' -> '[mbs.solver] time_step' (header: '[mbs]')."""
+    name, _, key = field.partition(".")
+    return f"{header} {name}" if not key else f"{_header(header, name)} {key}"
 
 
-def _named(keys: list[str], reason: str, where: str, quote: str) -> str:
-    names = " or ".join(f"{quote}{where}.{key}{quote}" for key in keys) or f"{quote}{where}{quote}"
-    return f"{names}: {reason}"
+def _named(refusal: Refusal, where: str) -> str:
+    """The refusal's sentence: each field as the scene writes it, with its value, then what is
+    allowed ('FILE: [mbs] n_modes = 0: must be a whole number of at least 1 ...')."""
+    prefix, bracket, header = where.rpartition("[")
+    names = " and ".join(f"{_key(field, bracket + header)} = {shown(value)}"
+                         for field, value in zip(refusal.fields, refusal.values))
+    return f"{prefix}{names}: {refusal.allowed}"
 
 
-def mbs_table_problems(table, where: str = "mbs") -> list[str]:
-    """The problems of a scene's [mbs] table, each naming its key ('mbs.speed_rpm'), without
-    reading the files it names (the scene's validation)."""
+def mbs_table_problems(table, where: str = "[mbs]") -> list[str]:
+    """The problems of a scene's [mbs] table, each naming its key as the scene writes it
+    ('[mbs] speed_rpm = 0: ...', '[mbs.solver] time_step = 0: ...'), without reading the files
+    it names (the scene's validation)."""
     if not isinstance(table, dict):
-        return [f"'{where}' must be a table"]
-    try:
-        values = _field_values(table, where, None)
-    except InputError as error:
-        return [str(error)]
-    return [_named(keys, reason, where, "'") for keys, reason in table_problems(values)]
+        return [f"{where} must be a table"]
+    values, problems = _field_values(table, where, None)
+    return problems + [_named(refusal, where) for refusal in table_problems(values)]
 
 
 def model_params_from_mapping(table: dict, where: str = "[mbs]", folder: Path = Path(".")) -> ModelParams:
-    """ModelParams from a mapping shaped like the scene's [mbs] table (folder: base of relative files)."""
+    """ModelParams from a mapping shaped like the scene's [mbs] table (folder: base of relative
+    files; where: how messages name the table, '[mbs]' or 'FILE: [mbs]')."""
     table = dict(table)
     pressure = table.get("gas_pressure")
-    values = _field_values(table, where, folder)
-    problems = table_problems(values)
+    values, problems = _field_values(table, where, folder)
+    problems += [_named(refusal, where) for refusal in table_problems(values)]
     if problems:
-        raise InputError("; ".join(_named(keys, reason, where, "") for keys, reason in problems))
+        raise InputError("; ".join(problems))
     params = _params(values)
     if pressure is not None:
-        params = _with_pressure_curve(params, pressure, folder, f"{where}.gas_pressure")
+        params = _with_pressure_curve(params, pressure, folder, _header(where, "gas_pressure"))
     params.validate()
     return params
 

@@ -90,7 +90,7 @@ def test_evenly_spaced_throws_by_default_and_angle_tables_must_match_the_throw_c
     assert ModelParams(throws=4).throw_angles == pytest.approx(np.radians([0.0, 90.0, 180.0, 270.0]))
     with pytest.raises(InputError, match="crank_angles_deg must give one angle per throw"):
         ModelParams(throws=2, crank_angles_deg=(0.0,)).validate()
-    with pytest.raises(InputError, match="throws must be a whole number"):
+    with pytest.raises(InputError, match="throws = 0: must be a whole number"):
         ModelParams(throws=0).validate()
 
 

@@ -57,7 +57,7 @@ def test_every_tables_unknown_keys_are_named_at_once_with_the_key_meant(tmp_path
         load_model_params(path)
     message = str(refused.value)
     assert "unknown key(s) ['speed_rmp'] ('speed_rmp': did you mean 'speed_rpm'?)" in message
-    assert "[mbs].solver: unknown key(s) ['timestep'] ('timestep': did you mean 'time_step'?)" in message
+    assert "[mbs.solver]: unknown key(s) ['timestep'] ('timestep': did you mean 'time_step'?)" in message
 
 
 @pytest.mark.parametrize("value", ["0", "-2", "2.5"])
@@ -67,6 +67,5 @@ def test_a_mode_count_that_is_not_a_positive_whole_number_is_refused_by_its_key(
 
     path = tmp_path / "modes.toml"
     path.write_text(f"[mbs]\nn_modes = {value}\n")
-    with pytest.raises(InputError, match=r"\[mbs\]\.n_modes: the number of Craig-Bampton modes must be a whole "
-                                         r"number of at least 1"):
+    with pytest.raises(InputError, match=rf"\[mbs\] n_modes = {value}: must be a whole number"):
         load_model_params(path)

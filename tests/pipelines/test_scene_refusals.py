@@ -53,7 +53,7 @@ def test_a_fine_mesh_in_mm_is_not_refused():
 def test_an_engine_speed_of_zero_names_its_key_and_file(tmp_path, capsys):
     scene = _extending(tmp_path, "user_joint.toml", "[mbs]\nspeed_rpm = 0.0\n")
     error = _refused_by_the_cli(scene, tmp_path, capsys)
-    assert f"{scene}: 'mbs.speed_rpm': engine speed_rpm must be positive, got 0.0" in error
+    assert f"{scene}: [mbs] speed_rpm = 0.0: must be positive (engine speed, rpm)" in error
 
 
 def test_bodies_without_support_are_named(coarse_cylinder, tmp_path, capsys):
