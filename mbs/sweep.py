@@ -167,12 +167,12 @@ def write_sweep(path, result: SweepResult) -> Path:
             ("wing_amplitude", result.wing_amplitude, "mm", "Wing torsion amplitude of CW1, CW2, ... (NaN: failed)."),
             ("dominant_frequencies", result.dominant_frequencies, "Hz", "Strongest CW1 wing-torsion frequencies."),
             ("dominant_orders", result.dominant_orders, "order", "The same frequencies in engine orders."),
-            ("real_time_factor", result.real_time_factor, "-", "Simulated seconds per wall-clock second."),
+            ("real_time_factor", result.real_time_factor, "1", "Simulated seconds per wall-clock second."),
             ("system_frequencies", result.system_frequencies, "Hz", "Coupled model eigenfrequencies per speed."),
-            ("resonance", result.resonance.astype(np.int8), "-", "1 where an order line crosses a mode."),
+            ("resonance", result.resonance.astype(np.int8), "1", "1 where an order line crosses a mode."),
         ]
         if result.unsettled_change is not None:
-            fields.append(("unsettled_change", result.unsettled_change, "-",
+            fields.append(("unsettled_change", result.unsettled_change, "1",
                            "Relative change of the wing amplitude between the first and the last engine "
                            "cycle of the steady half (NaN: too short to tell); above 0.05 the run had not settled."))
         for name, data, units, description in fields:
