@@ -25,6 +25,7 @@ from mbs.plots import plot_campbell, plot_sweep
 from mbs.run import run_model
 from pipelines.jobs.sweep import check_resolution, parse_speeds, speed_sweep, sweep_paths
 from pipelines.parallel import add_cluster_arguments
+from pipelines.scene.checks import engine_speed_warnings
 from reduction.errors import InputError
 
 
@@ -101,7 +102,7 @@ def run_sweep(args) -> int:
     try:
         params = model_params(args.scene)
         speeds = parse_speeds(args.speeds)
-        for message in check_resolution(params, speeds):
+        for message in engine_speed_warnings(speeds, f"--speeds {args.speeds}") + check_resolution(params, speeds):
             print(f"fretwork: warning: {message}", file=sys.stderr)
         result = speed_sweep(params, speeds, path=path, progress=True, scheduler=args.scheduler,
                              workers=args.workers)

@@ -68,6 +68,8 @@ ZERO_NAMES = {
 SAME_VALUE = 1e-12
 #: characters per line of a stacked panel's y label; of a map's title (9 pt), per inch of figure
 LABEL_WIDTH, TITLE_CHARACTERS_PER_INCH = 24, 14
+#: characters per inch of figure of a figure's title (12 pt)
+SUPTITLE_CHARACTERS_PER_INCH = 10
 
 
 @dataclass(frozen=True)
@@ -175,7 +177,7 @@ def _panel(ax, field: Field, x: np.ndarray, y: np.ndarray, **style) -> None:
                 bbox={"facecolor": "white", "edgecolor": "0.7", "alpha": 0.9})
 
 
-def _path_plot(mesh, fields, a, b, title, out_dir) -> Path:
+def _path_plot(mesh, fields, a, b, title, out_dir, state: Drawn) -> Path:
     """Fields along the straight line through the middle of the interface's ``b`` extent (the
     paper's Figs. 9 and 12), interpolated linearly over the contact facets at PATH_POINTS points;
     gaps where the line crosses a hole or leaves the contact."""
@@ -189,8 +191,18 @@ def _path_plot(mesh, fields, a, b, title, out_dir) -> Path:
     fig.align_ylabels(axes)
     axes[-1].set_xlabel(f"{'xyz'[a]} [mm] along {'xyz'[b]} = {middle + 0.0:.4g} mm "
                         f"(the middle of the contact's {'xyz'[b]} extent)")
-    fig.suptitle(f"{title}: fields along the line {'xyz'[b]} = {middle + 0.0:.3g} mm through the middle")
+    _suptitle(fig, f"{title}: fields along the line {'xyz'[b]} = {middle + 0.0:.3g} mm through the middle"
+                   f"{state.when}", state.stop)
     return _save(fig, out_dir / "path.png")
+
+
+def _suptitle(fig, title: str, stop: str | None) -> None:
+    """A figure's title; a run that stopped early says so on a line of its own, in red."""
+    if stop is None:
+        fig.suptitle(title)
+        return
+    width = int(SUPTITLE_CHARACTERS_PER_INCH * fig.get_size_inches()[0])
+    fig.suptitle("\n".join(textwrap.fill(line, width) for line in (title, stop)), color="firebrick")
 
 
 def _save(fig, target: Path) -> Path:
@@ -199,9 +211,10 @@ def _save(fig, target: Path) -> Path:
     return target
 
 
-def _map(mesh, field: Field, a, b, title, target) -> Path:
+def _map(mesh, field: Field, a, b, title, target, stop: str | None = None) -> Path:
     """A filled contour map with its colour bar under a wide map and beside a tall one, so that
-    the bar's label fits along it; a uniform field is drawn in one colour and said so."""
+    the bar's label fits along it; a uniform field is drawn in one colour and said so, and a run
+    that stopped early (``stop``) says so too."""
     width, height = np.ptp(mesh.x), np.ptp(mesh.y)
     wide = height <= width
     if wide:  # 5.8 in of map across, under it its axis and the colour bar
@@ -209,16 +222,19 @@ def _map(mesh, field: Field, a, b, title, target) -> Path:
     else:  # 4.3 to 7 in of map high, beside it its axis and the colour bar
         map_height = float(np.clip(4.3 * height / width, 4.3, 7.0))
         figsize = (max(4.0, map_height * width / height + 2.4), map_height + 0.9)
-    title = _title(figsize[0], title, field.note())
+    title = _title(figsize[0], title, stop, field.note())
     fig, ax = plt.subplots(figsize=(figsize[0], figsize[1] + 0.2 * (title.count("\n") + 1)), layout="constrained")
     value = field.shown
     if field.is_uniform:
         mappable = ax.tripcolor(mesh, value, cmap="viridis", vmin=value[0] - 1.0, vmax=value[0] + 1.0,
                                 edgecolors="none", antialiased=False)
     else:
-        # levels spanning the values exactly: with matplotlib's round-number levels a COF of
-        # 0.6000000000000002 lay above the top level 0.6 and was left white where μ_max was reached
-        mappable = ax.tricontourf(mesh, value, levels=np.linspace(value.min(), value.max(), 25), cmap="viridis")
+        # levels spanning the values: with matplotlib's round-number levels a COF of
+        # 0.6000000000000002 lay above the top level 0.6 and was left white where μ_max was reached;
+        # a top level at the largest value itself left a plateau there (a patch at μ_max) white too
+        levels = np.linspace(value.min(), value.max(), 25)
+        levels[-1] = np.nextafter(levels[-1], np.inf)
+        mappable = ax.tricontourf(mesh, value, levels=levels, cmap="viridis")
     ax.set_aspect("equal")
     ax.margins(0.0)
     bar = fig.colorbar(mappable, ax=ax, location="bottom" if wide else "right", fraction=0.05, pad=0.02,
@@ -230,42 +246,100 @@ def _map(mesh, field: Field, a, b, title, target) -> Path:
     return _save(fig, target)
 
 
+@dataclass(frozen=True)
+class Drawn:
+    """The state a results file's field plots show: ``/final`` (``row`` None), or, for a run that
+    stopped early (slid off, runaway wear: no ``/final``), the last recorded cycle's row of
+    ``/cycles/fields``, that of ``cycle``. ``stop``: how such a run ended, said on every figure."""
+
+    group: h5py.Group
+    row: int | None = None
+    cycle: int | None = None
+    stop: str | None = None
+
+    def fields(self, dimension: int) -> dict[str, Field]:
+        return _fields(self.group, dimension, self.row)
+
+    @property
+    def name(self) -> str:
+        """The state's legend entry."""
+        return "final" if self.row is None else f"end of cycle {self.cycle} (last recorded)"
+
+    @property
+    def when(self) -> str:
+        """What a title adds to say which state it shows: nothing for the final one."""
+        return "" if self.row is None else f", cycle {self.cycle} (the last recorded)"
+
+
+def stop_note(file: h5py.File) -> str | None:
+    """How a run that stopped early ended, e.g. "the run stopped in cycle 8: the joint slides
+    off", from the file's ``ending``; None for a run that ended normally."""
+    from contact.verdict import Ending
+    from pipelines.jobs.run import EARLY_ENDINGS, ENDINGS
+
+    ending = str(file.attrs.get("ending", ""))
+    if ending not in {e.value for e in EARLY_ENDINGS}:
+        return None
+    cycles = file["cycles/cycle"][()] if "cycles/cycle" in file else np.zeros(0, int)
+    failed = int(cycles[-1]) + 1 if cycles.size else 1  # /cycles holds every cycle that ended
+    stopped, _, why = ENDINGS[Ending(ending)].partition(": ")  # "stopped: the joint slides off"
+    return f"the run {stopped} in cycle {failed}: {why}"
+
+
+def drawn_state(file: h5py.File) -> Drawn | None:
+    """The state to draw (:class:`Drawn`); None when a run stopped before its first recorded
+    cycle ended: nothing converged beyond the preload has fields to draw."""
+    stop = stop_note(file)
+    if "final" in file:
+        return Drawn(file["final"], stop=stop)
+    recorded = file["cycles/fields/cycle"][()] if "cycles/fields/cycle" in file else np.zeros(0, int)
+    if stop is None or not recorded.size:
+        return None
+    return Drawn(file["cycles/fields"], recorded.size - 1, int(recorded[-1]), stop)
+
+
 def plot_results(path: str | Path, out_dir: str | Path) -> list[Path]:
-    """Draw the standard figures of one results file; returns the PNG paths."""
+    """Draw the standard figures of one results file; returns the PNG paths. A run that stopped
+    early (slid off, runaway wear) is drawn up to its last converged cycle, each figure saying
+    where and why it stopped; one that stopped before any cycle ended has none."""
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     with h5py.File(path, "r") as file:
+        state = drawn_state(file)
+        if state is None:
+            return []
+        out_dir.mkdir(parents=True, exist_ok=True)
         coordinates = file["points/coordinates"][()]
         title = file.attrs.get("scene_name", "")
         if coordinates.shape[1] == 2:
-            written = [_line_fields(file, coordinates, title, out_dir)]
+            written = [_line_fields(file, state, coordinates, title, out_dir)]
         else:
-            written = _surface_maps(file, coordinates, title, out_dir)
+            written = _surface_maps(file, state, coordinates, title, out_dir)
         if "figures" in file["cycles"]:
-            written.append(_cycles_plot(file["cycles"], title, out_dir))
+            written.append(_cycles_plot(file["cycles"], title, out_dir, state.stop))
     return written
 
 
-def _line_fields(file, coordinates, title, out_dir) -> Path:
-    """2D scenes: every final field along the contact, pressure and shear of the first cycle too."""
-    fields = _fields(file["final"], 2)
+def _line_fields(file, state: Drawn, coordinates, title, out_dir) -> Path:
+    """2D scenes: every field of the drawn state along the contact, pressure and shear of the
+    first cycle too."""
+    fields = state.fields(2)
     order = np.argsort(coordinates[:, 0])
     x = coordinates[order, 0]
     fig, axes = _stacked(len(fields))
     first = file["cycles/fields"]
     for ax, field in zip(axes, fields.values()):
-        _panel(ax, field, x, field.shown[order], lw=1.4, label="final")
+        _panel(ax, field, x, field.shown[order], lw=1.4, label=state.name)
         if field.name in ("pressure", "shear") and field.name in first:
             initial = first[field.name][0]
             if field.name == "shear":
                 initial = np.linalg.norm(initial.reshape(initial.shape[0], -1), axis=1)
             ax.plot(x, initial[order], "--", lw=1.0, label="first cycle")
             ax.legend(fontsize=7)
-        if field.name == "wear_depth" and "master_wear_depth" in file["final"]:
+        if field.name == "wear_depth" and state.row is None and "master_wear_depth" in state.group:
             _master_profile(ax, file)
     fig.align_ylabels(axes)
     axes[-1].set_xlabel("position along the contact x [mm]")
-    fig.suptitle(f"{title}: interface fields")
+    _suptitle(fig, f"{title}: interface fields{state.when}", state.stop)
     return _save(fig, out_dir / "fields.png")
 
 
@@ -280,18 +354,19 @@ def _master_profile(ax, file) -> None:
     ax.legend(fontsize=7)
 
 
-def _surface_maps(file, coordinates, title, out_dir) -> list[Path]:
-    """3D scenes: the path plot, a map per final field and the maps after the COF phase."""
-    fields = _fields(file["final"], 3)
+def _surface_maps(file, state: Drawn, coordinates, title, out_dir) -> list[Path]:
+    """3D scenes: the path plot, a map per field of the drawn state and the maps after the COF phase."""
+    fields = state.fields(3)
     a, b = _plane_axes(coordinates)
     facets = file["points/facets"][()] if "points/facets" in file else None
     # Triangles of the interface's own facets: holes (a bolt hole) stay holes.
     triangles = None if facets is None else (
         facets if facets.shape[1] == 3 else np.concatenate([facets[:, [0, 1, 2]], facets[:, [0, 2, 3]]]))
     mesh = matplotlib.tri.Triangulation(coordinates[:, a], coordinates[:, b], triangles)
-    written = [_path_plot(mesh, fields, a, b, title, out_dir)]
+    written = [_path_plot(mesh, fields, a, b, title, out_dir, state)]
     for name, field in fields.items():
-        written.append(_map(mesh, field, a, b, f"{title}: {name.replace('_', ' ')}", out_dir / f"{name}_map.png"))
+        written.append(_map(mesh, field, a, b, f"{title}: {name.replace('_', ' ')}{state.when}",
+                            out_dir / f"{name}_map.png", state.stop))
     # the stabilised state before the wear phase (the paper's Figs. 8, 15 and 16a-b)
     phase_of = dict(zip(file["cycles/cycle"][()], file["cycles/phase"][()]))
     recorded = file["cycles/fields/cycle"][()] if "cycles/fields/cycle" in file else np.zeros(0, int)
@@ -302,12 +377,13 @@ def _surface_maps(file, coordinates, title, out_dir) -> list[Path]:
         for name in ("cof", "slip_range", "max_utilised_cof", "dissipation_in_cycle"):
             written.append(_map(mesh, at_row[name], a, b,
                                 f"{title}: {name.replace('_', ' ')} after the COF phase (cycle {recorded[row]})",
-                                out_dir / f"{name}_map_end_of_cof_phase.png"))
+                                out_dir / f"{name}_map_end_of_cof_phase.png", state.stop))
     return written
 
 
-def _cycles_plot(cycles, title, out_dir) -> Path:
-    """Area fractions (and the clamp force) over the real load cycles, the wear phase marked.
+def _cycles_plot(cycles, title, out_dir, stop: str | None = None) -> Path:
+    """Area fractions (and the clamp force) over the real load cycles, the wear phase marked,
+    and the end of the last converged cycle of a run that stopped early (``stop``: how).
 
     The axis is the equivalent real cycles on a log scale: the COF phase counts one real
     cycle per simulated one, each wear block stands for as many as its (adaptive) jump, so
@@ -321,9 +397,10 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
     fig, axes = plt.subplots(2 if has_clamp else 1, 1, figsize=(9, 5.2 if has_clamp else 3.2), sharex=True,
                              layout="constrained")
     axes = np.atleast_1d(axes)
+    single = {"marker": "o"} if equivalent.size == 1 else {}  # a line through one point draws nothing
     for key, name in AREA_LABELS.items():
         if key in figures:
-            axes[0].plot(equivalent, figures[key][()], label=name)
+            axes[0].plot(equivalent, figures[key][()], label=name, **single)
     axes[0].set_ylabel("area / nominal area [-]")
     # above 1 where wear or a moving patch brings points beyond the preload's area into contact
     largest = max((np.nanmax(figures[key][()], initial=0.0) for key in AREA_LABELS if key in figures), default=1.0)
@@ -333,7 +410,7 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
     axes[0].grid(alpha=0.3)
     if has_clamp:
         force = clamp[()] / 1000.0
-        axes[1].plot(equivalent, force, color="k")
+        axes[1].plot(equivalent, force, color="k", **single)
         axes[1].set_ylabel("clamp (bolt) force [kN]")
         # plain numbers, no "1e-5+8.98515e2" offset; a steady force gets a ±0.5 % window
         axes[1].yaxis.set_major_formatter(ScalarFormatter(useOffset=False))
@@ -353,6 +430,11 @@ def _cycles_plot(cycles, title, out_dir) -> Path:
         label += f"; wear phase after {start:,.0f}: {wear.size} blocks to {equivalent[-1]:.3g} cycles"
     elif wear.size:
         label += f"; wear phase throughout: {wear.size} blocks to {equivalent[-1]:.3g} cycles"
+    if stop is not None:
+        for ax in axes:
+            ax.axvline(equivalent[-1], color="firebrick", lw=1.0)
+        axes[0].text(equivalent[-1], 1.0, "stopped ", transform=axes[0].get_xaxis_transform(),
+                     ha="right", va="bottom", fontsize=7, color="firebrick")
     axes[-1].set_xlabel(label)
-    fig.suptitle(f"{title}: contact condition over cycles")
+    _suptitle(fig, f"{title}: contact condition over cycles", stop)
     return _save(fig, out_dir / "cycles.png")

@@ -67,8 +67,10 @@ def _run_section(path: Path, root: Path) -> str:
             return ""
         name, scene = str(attrs.get("scene_name", "")), str(attrs.get("scene_toml", ""))
         if "summary" not in file:
+            message = str(file.attrs.get("ending_message", ""))  # why the increment that ended it failed
             return (f"<h2>Run {html.escape(name)} ({html.escape(str(path.relative_to(root)))})</h2>"
                     f"<p class='unsafe'>{html.escape(_no_summary(file))}</p>"
+                    + (f"<p>why: {html.escape(message)}</p>" if message else "")
                     + (f"<details><summary>scene</summary><pre>{html.escape(scene)}</pre></details>" if scene else ""))
         summary = {"verdict": file["summary"].attrs["verdict"], "stationary": bool(file["summary"].attrs["stationary"]),
                    **json.loads(file["summary"].attrs["figures"])}

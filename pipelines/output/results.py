@@ -10,7 +10,8 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
                            hold the top scene file's own text, its base not included),
                            complete (False until the run ends),
                            ending (contact.verdict.Ending: completed, shakedown, loosening, or
-                           slid_off / wear_runaway: the cycles so far, without /final and /summary)
+                           slid_off / wear_runaway: the cycles so far, without /final and /summary;
+                           such a file's ending_message is the failed increment's error, in words)
     /points/               coordinates (n, dim) mm, area (n,) mm² (mm in 2D), normal (n, dim),
                            initial_overclosure (n,) mm, facets (m, k) point indices of the
                            contact surface's facets (lines in 2D, quads/triangles in 3D)
@@ -403,11 +404,14 @@ class ResultsWriter(Observer):
             surface.create_dataset(name, data=data).attrs["units"] = units
         self.file["final"].create_dataset("master_wear_depth", data=depth).attrs["units"] = "mm"
 
-    def stop(self, ending) -> Path:
+    def stop(self, ending, message: str | None = None) -> Path:
         """Mark the file with the run's :class:`contact.verdict.Ending`, close it and move it into
-        place; alone, for a run that ended early (slid off, runaway wear): the cycles so far."""
+        place; alone, for a run that ended early (slid off, runaway wear): the cycles so far, and
+        ``message``, why the increment that ended it failed, as ``ending_message``."""
         self._flush()
         self.file.attrs.update(complete=True, ending=ending.value)
+        if message is not None:
+            self.file.attrs["ending_message"] = message
         self.file.close()
         # the rows were appended block by block, each compressed block leaving unused space
         # behind; a fresh copy holds the same datasets in about 60 % of the bytes

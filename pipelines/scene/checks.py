@@ -14,6 +14,7 @@ import math
 
 from contact.procedure import Procedure
 from mbs.scene import mbs_table_problems
+from reduction.errors import listed
 from reduction.mesh.generators import MAX_GENERATED_NODES, least_nodes
 from pipelines.scene.schema import (
     BODY_LOAD_KEYS,
@@ -366,6 +367,46 @@ def _number(value) -> bool:
     return isinstance(value, NUMBER) and not isinstance(value, bool)
 
 
+#: Engine speeds (rpm) outside this band are most likely written in another unit. The slowest
+#: engines with bolted counterweights, large two-stroke marine diesels, run at 60-130 rpm at full
+#: load, so below SLOWEST_ENGINE_RPM a speed is most likely in Hz (60 times too low: the default
+#: medium-speed engine's 750 rpm is 12.5 Hz; a 1,800 rpm engine is 30 Hz) or rad/s (about 10
+#: times too low); a 750 rpm engine in rad/s (78.5) lies among real marine engines' speeds and
+#: cannot be told apart. Diesels with bolted counterweights run at up to about 5,000 rpm, petrol
+#: car engines up to about 9,000, so above FASTEST_ENGINE_RPM a speed is most likely in degrees
+#: per second (6 times too high) or has a digit too many.
+SLOWEST_ENGINE_RPM = 30.0
+FASTEST_ENGINE_RPM = 10000.0
+
+
+def _speeds_text(speeds) -> str:
+    values = sorted(float(v) for v in speeds)
+    if len(values) > 3:
+        return f"{len(values)} speeds from {values[0]:g} to {values[-1]:g} rpm are"
+    return f"{listed([format(v, 'g') for v in values])} rpm {'is' if len(values) == 1 else 'are'}"
+
+
+def engine_speed_warnings(speeds, named: str) -> list[str]:
+    """Warnings about engine speeds (rpm) that are likely a unit mistake, at most one for those
+    too slow and one for those too fast (:data:`SLOWEST_ENGINE_RPM`, :data:`FASTEST_ENGINE_RPM`);
+    ``named`` says where they were given ('[mbs] speed_rpm', '--speeds 5:20:5')."""
+    speeds = [float(v) for v in speeds if _number(v) and math.isfinite(v) and v > 0]
+    slow = [v for v in speeds if v < SLOWEST_ENGINE_RPM]
+    fast = [v for v in speeds if v > FASTEST_ENGINE_RPM]
+    found = []
+    if slow:
+        v = min(slow)
+        found.append(f"{named}: {_speeds_text(slow)} below {SLOWEST_ENGINE_RPM:g} rpm, slower than any engine "
+                     f"runs: probably Hz or rad/s (rpm expected: {v:g} Hz is {60 * v:g} rpm, {v:g} rad/s is "
+                     f"{30 * v / math.pi:.4g} rpm)")
+    if fast:
+        v = max(fast)
+        found.append(f"{named}: {_speeds_text(fast)} above {FASTEST_ENGINE_RPM:,.0f} rpm, faster than any engine "
+                     f"with bolted counterweights runs: probably °/s or a digit too many (rpm expected: "
+                     f"{v:g} °/s is {v / 6:.4g} rpm)")
+    return found
+
+
 def _material_warnings(name, material) -> list[str]:
     found = []
     where = f"materials.{name}"
@@ -403,6 +444,9 @@ def plausibility(data: dict) -> list[str]:
     elif _number(amplitude) and 0 < amplitude < 1e-3:
         found.append(f"'coupling.wing_amplitude' = {amplitude:g} mm is below 1 µm: probably m "
                      f"(mm expected: {amplitude:g} m is {1e3 * amplitude:g} mm)")
+    speed = table("mbs").get("speed_rpm")
+    if _number(speed):
+        found += engine_speed_warnings([speed], "[mbs] speed_rpm")
     slip = table("contact").get("critical_slip")
     if _number(slip) and slip > 1.0:
         found.append(f"'contact.critical_slip' = {slip:g} mm is larger than 1 mm: probably µm "
