@@ -2,6 +2,7 @@
 
 Modules, in the order data flows through them:
     parameters     model dataclasses (throw, counterweight, excitation, solver); scene  the [mbs] table
+    refusal        a parameter refused: its fields, values and what is allowed (scene names the keys)
     counterweight  generic CW mesh (its shape from reduction.mesh.generators) + Craig-Bampton reduction
     flexible_throw Craig-Bampton crank throw (the flexible_crankshaft effect); joint  CW-web joint stiffness
     excitation     gas-torque orders and gear mesh
