@@ -198,8 +198,11 @@ def cmd_sweep(args) -> int:
     from pipelines.jobs.limit import parse_range_um
     from pipelines.jobs.margins import describe_margins, margin_sweep, plot_margins
     from pipelines import scene as scenes
+    from pipelines.cli.mbs import model_params, sweep_warnings
 
     speeds = parse_speeds(args.speeds)
+    for message in sweep_warnings(model_params(args.scene), speeds, args.speeds):
+        _warn(message)
     low, high = parse_range_um(args.amplitude)
     name = scenes.load(args.scene).name
     folder, out = sweep_paths(args.out)

@@ -96,13 +96,19 @@ def _table(result) -> str:
     return "\n".join(lines)
 
 
+def sweep_warnings(params: ModelParams, speeds, written: str) -> list[str]:
+    """The warnings of a sweep's speeds (``written``: as the user gave them): a likely unit
+    mistake, and a time step too coarse for the gear mesh at the fastest of them."""
+    return engine_speed_warnings(speeds, f"--speeds {written}") + check_resolution(params, speeds)
+
+
 def run_sweep(args) -> int:
     """Run the sweep described by parsed args; 0 if at least one speed converged, 1 if none, 2 on bad input."""
     folder, path = sweep_paths(args.out)
     try:
         params = model_params(args.scene)
         speeds = parse_speeds(args.speeds)
-        for message in engine_speed_warnings(speeds, f"--speeds {args.speeds}") + check_resolution(params, speeds):
+        for message in sweep_warnings(params, speeds, args.speeds):
             print(f"fretwork: warning: {message}", file=sys.stderr)
         result = speed_sweep(params, speeds, path=path, progress=True, scheduler=args.scheduler,
                              workers=args.workers)

@@ -69,3 +69,14 @@ def test_fretwork_sweep_warns_once_of_its_speeds(tmp_path, monkeypatch, capsys):
     assert ("fretwork: warning: --speeds 10,12.5: 10 and 12.5 rpm are below 30 rpm, slower than any engine runs: "
             "probably Hz or rad/s (rpm expected: 10 Hz is 600 rpm") in error
     assert "stopped by the test" in error
+
+
+def test_fretwork_sweep_with_margins_warns_once_of_its_speeds(tmp_path, capsys):
+    # this scene has no contact: the margin sweep refuses it after the speeds were judged
+    scene = _scene(tmp_path, 750.0)
+    assert main(["sweep", str(scene), "--speeds", "10,12.5", "--margins", "--workers", "0",
+                 "--out", str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err
+    assert error.count("warning") == 1
+    assert "fretwork: warning: --speeds 10,12.5: 10 and 12.5 rpm are below 30 rpm" in error
+    assert "fretwork: error:" in error
