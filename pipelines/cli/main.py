@@ -96,7 +96,9 @@ def _human_summary(outcome) -> str:
              f"  still sliding (the verdict's measure) {s.get('active_slip_area_fraction', s['slip_area_fraction']):.1%}, "
              f"COF evolved on {s['cof_evolved_area_fraction']:.1%}"
              + _widened(s.get('active_slip_area_fraction'), s['cof_evolved_area_fraction']),
-             f"  max wear depth {s['max_wear_depth_mm'] * 1000:.2f} µm, dissipated {s['dissipated_energy_mJ']:.4g} mJ"]
+             f"  max wear depth {s['max_wear_depth_mm'] * 1000:.2f} µm, dissipated {s['dissipated_energy_mJ']:.4g} mJ "
+             f"in the simulated cycles" + ("" if s["equivalent_cycles"] == s["cycles_run"] else
+                                           " (not multiplied by the cycle jump, unlike the wear)")]
     if "wing_amplitude_mm" in s:
         lines.insert(1, f"  wing amplitude {1e3 * s['wing_amplitude_mm']:.0f} µm at {s['engine_speed_rpm']:.0f} rpm, "
                         f"one load cycle = {s['load_cycle'].replace('_', ' ')} ({s['load_cycle_frequency_hz']:.0f} Hz)")

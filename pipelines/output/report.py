@@ -30,7 +30,7 @@ KEY_FIGURES = (
     ("damaged_area_fraction", "at μ_max (damaged) area", "%"), ("active_slip_area_fraction", "still sliding (verdict)", "%"),
     ("cof_evolved_area_fraction", "COF evolved area", "%"), ("min_stick_margin", "smallest stick margin", None),
     ("max_wear_depth_mm", "max wear depth [mm]", None), ("wear_volume_mm3", "wear volume [mm³]", None),
-    ("dissipated_energy_mJ", "dissipated energy [mJ]", None),
+    ("dissipated_energy_mJ", "dissipated energy, simulated cycles [mJ]", None),
     ("bolt_force_initial_N", "clamp force initial [N]", None), ("bolt_force_final_N", "clamp force final [N]", None),
     ("clamp_force_loss_fraction", "clamp force loss", "%"),
     ("fdp_max_MPa_mm", "FDP max τ·δ [MPa·mm]", None), ("fdp_max_location_mm", "FDP max at [mm]", None),
