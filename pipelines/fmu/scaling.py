@@ -39,15 +39,18 @@ class LoadScaling:
 
     scale: factor on the vibrating part of every history; cycle: "wing_period" or "revolution";
     frequency_hz: of the harmonic kept (wing_period) or of the engine revolution (revolution);
-    wing_amplitude: the run's stated wing amplitude, mm (scale × the multibody amplitude the load
-    cycle refers to); multibody_wing_amplitude: half peak-to-peak of the multibody wing torsion,
-    mm; counterweight: which CW (1 = first); window: (n,) bool, the samples the means are taken
-    over (all for wing_period, the last revolution for revolution).
+    scaled_amplitude: the multibody amplitude the scale applies to, mm: the amplitude of the wing
+    torsion's harmonic at frequency_hz (wing_period), its half peak-to-peak (revolution);
+    wing_amplitude: the run's stated wing amplitude, mm (scale × scaled_amplitude);
+    multibody_wing_amplitude: half peak-to-peak of the multibody wing torsion, mm (the project's
+    wing amplitude); counterweight: which CW (1 = first); window: (n,) bool, the samples the means
+    are taken over (all for wing_period, the last revolution for revolution).
     """
 
     scale: float
     cycle: str
     frequency_hz: float
+    scaled_amplitude: float
     wing_amplitude: float
     multibody_wing_amplitude: float
     counterweight: int
@@ -63,12 +66,19 @@ class LoadScaling:
         return mean + self.scale * (values - mean)
 
     def describe(self) -> str:
-        """One sentence for the FMU's description."""
-        kept = (f"each history its mean plus its harmonic at {self.frequency_hz:.6g} Hz"
-                if self.cycle == "wing_period" else "each history about its mean over the last revolution")
-        return (f"as the coupled run used them: vibrating parts scaled by {self.scale:.6g} to the stated wing "
-                f"amplitude {self.wing_amplitude:.6g} mm of cw{self.counterweight} (multibody "
-                f"{self.multibody_wing_amplitude:.6g} mm), {self.cycle} load cycle, {kept}")
+        """One sentence for the FMU's description: the scale times the amplitude it applies to is
+        the stated wing amplitude, and the multibody wing amplitude is named apart from it."""
+        multibody = "the multibody wing amplitude (half the peak-to-peak of the wing torsion)"
+        stated = f"the stated wing amplitude {self.wing_amplitude:.6g} mm of cw{self.counterweight}"
+        if self.cycle == "wing_period":
+            return (f"as the coupled run used them ({self.cycle} load cycle): each history its mean plus its "
+                    f"harmonic at {self.frequency_hz:.6g} Hz, the harmonic scaled by {self.scale:.6g}: "
+                    f"{self.scale:.6g} × {self.scaled_amplitude:.6g} mm, the amplitude of the wing torsion's "
+                    f"harmonic in the multibody run, is {stated}; {multibody} is "
+                    f"{self.multibody_wing_amplitude:.6g} mm")
+        return (f"as the coupled run used them ({self.cycle} load cycle): each history about its mean over the "
+                f"last revolution, its difference from that mean scaled by {self.scale:.6g}: "
+                f"{self.scale:.6g} × {self.scaled_amplitude:.6g} mm, {multibody}, is {stated}")
 
 
 def load_scaling(results: h5py.File, time: np.ndarray, results_path: Path) -> LoadScaling | None:
@@ -95,7 +105,7 @@ def load_scaling(results: h5py.File, time: np.ndarray, results_path: Path) -> Lo
         frequency = 1.0 / revolution
         reference = float(wing_amplitude(torsion))
         window = time >= time[-1] - revolution
-    return LoadScaling(scale, cycle, frequency, scale * reference, float(wing_amplitude(torsion)),
+    return LoadScaling(scale, cycle, frequency, reference, scale * reference, float(wing_amplitude(torsion)),
                        counterweight, window)
 
 
