@@ -30,6 +30,10 @@ VR_PERIOD = 2
 VR_PERIODIC = 3
 VR_FIRST_OUTPUT = 100
 
+#: The generationTool of every FMU fretwork writes: with the player's table, what marks an FMU as
+#: fretwork's (:func:`pipelines.fmu.export.written_by_fretwork`).
+GENERATION_TOOL = "fretwork"
+
 
 # SI base-unit exponents and factor (value_SI = factor * value) of the units fretwork writes,
 # so importing tools can convert; other units are declared by name only.
@@ -94,7 +98,7 @@ def _description_root(table: PlaybackTable, fmi_version: int, identifier: str, t
             "modelName": identifier,
             ("instantiationToken" if fmi3 else "guid"): token,
             "description": _description(table),
-            "generationTool": "fretwork",
+            "generationTool": GENERATION_TOOL,
             "generationDateAndTime": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "variableNamingConvention": "structured",
         },
@@ -119,8 +123,16 @@ def _description_root(table: PlaybackTable, fmi_version: int, identifier: str, t
 
 
 def _description(table: PlaybackTable) -> str:
-    """What the FMU plays: how many outputs, and for a coupled run's histories, their scaling."""
+    """What the FMU plays: how many outputs, which part of a multibody run, and for a coupled run's
+    histories, their scaling."""
     text = f"Playback of {len(table.names)} load history outputs sampled at {table.time.size} times"
+    if table.multibody_part == "steady":
+        text += (f", the steady second half of the multibody run (from t = {table.time[0]:.6g} s), where its wing "
+                 "amplitude is measured; the first half, the start-up transient, is left out (export-fmu --whole "
+                 "plays it)")
+    elif table.multibody_part == "whole":
+        text += (", the whole multibody run, its start-up transient included (its wing amplitude is measured on "
+                 "the steady second half)")
     return text if table.scaling is None else f"{text}, {table.scaling.describe()}"
 
 

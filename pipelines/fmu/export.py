@@ -12,6 +12,13 @@ Playback parameters of every exported FMU (all ``fixed``: set before initializat
 - ``period`` (s): repetition period, default the sampled span t_last - t_first. A longer
   period bridges the gap after the last sample linearly back to the first sample.
 
+The FMU file never takes the place of a file fretwork did not write: it must be named ``*.fmu``
+(the FMI standard's extension, which importing tools look for, and a name no results file, scene
+or other input of fretwork has), may not be the results file it is made from, and replaces an
+existing file only if that is an FMU fretwork wrote (:func:`written_by_fretwork`). Its folder is
+claimed as every command's output folder is (:func:`pipelines.output.locks.claim`: checked,
+created, locked while the FMU is written).
+
 Units follow the results file (fretwork uses mm, N, MPa, t, s, mJ).
 """
 
@@ -25,17 +32,25 @@ import sys
 import tempfile
 import uuid
 import warnings
+import xml.etree.ElementTree as ET
 import zipfile
+import zlib
 from pathlib import Path
 from typing import Sequence
 
 from reduction.errors import InputError
-from pipelines.fmu.table import TABLE_FILE, instantiation_token, model_identifier, read_playback_table, write_table
-from pipelines.fmu.description import (FMI_HEADERS, FMI_SOURCES, PLAYER_HEADERS, PLAYER_SOURCES,
+from pipelines.fmu.table import (TABLE_FILE, TABLE_MAGIC, instantiation_token, model_identifier, read_playback_table,
+                                 results_file, write_table)
+from pipelines.fmu.description import (FMI_HEADERS, FMI_SOURCES, GENERATION_TOOL, PLAYER_HEADERS, PLAYER_SOURCES,
                                        build_description_xml, model_description_xml)
+from pipelines.output.locks import claim
 
 
 TEMPLATE_DIR = Path(__file__).parent / "template"
+FMU_SUFFIX = ".fmu"
+#: what reading a damaged or foreign zip file may raise
+_UNREADABLE = (OSError, EOFError, KeyError, ValueError, RuntimeError, NotImplementedError, zipfile.BadZipFile,
+               zlib.error, ET.ParseError)
 
 
 class SourceOnlyFmuWarning(UserWarning):
@@ -52,38 +67,48 @@ def export_fmu(
     signals: Sequence[str] | None = None,
     fmi_version: int = 2,
     *,
+    whole: bool = False,
     model_name: str | None = None,
     compiler: str | None = None,
 ) -> Path:
     """Write a co-simulation FMU that plays back the ``/histories`` of a results file.
 
-    results_path: HDF5 results file with a ``/histories`` group (time in s, signals (n,) or (n, k)).
-    output_path: FMU file to write; parent folders are created. Written atomically: on any error
-        no FMU file is left at output_path.
+    results_path: HDF5 results file with a ``/histories`` group (time in s, signals (n,) or (n, k)),
+        or a run's output folder (:func:`pipelines.fmu.table.results_file`).
+    output_path: FMU file to write, named ``*.fmu``; parent folders are created. Not the results
+        file; an existing file there is replaced only if it is an FMU fretwork wrote. Written
+        atomically: on any error no FMU file is left at output_path.
     signals: dataset names under ``/histories`` to export, in this order; None exports all.
         A signal of shape (n, k) becomes k outputs ``<signal>.<component>`` when the dataset has a
         ``components`` attribute, else ``<signal>[1]`` .. ``<signal>[k]``.
     fmi_version: 2 (FMI 2.0, default) or 3 (FMI 3.0).
+    whole: of ``fretwork mbs``'s run.h5, play the whole run, start-up transient included; by
+        default its steady part (:func:`mbs.histories.steady_part`), where the wing amplitude is
+        measured.
     model_name: model name and identifier (binary name); default from the output file name.
     compiler: C compiler command; default $CC, then cc, gcc, clang. If none is found, or this
         platform has no FMI binary folder, the FMU holds sources only and a
         SourceOnlyFmuWarning is issued.
 
     Raises InputError for bad input (missing file, group or signal; empty, non-finite or
-    non-increasing time; NaN or infinite data) and FmuBuildError if compilation fails.
-    Returns the path of the written FMU.
+    non-increasing time; NaN or infinite data; an output path that is not an FMU's to take) and
+    FmuBuildError if compilation fails. Returns the path of the written FMU.
     """
     if fmi_version not in (2, 3):
         raise InputError(f"FMI version {fmi_version!r} is not supported: choose 2 or 3")
     output_path = Path(output_path)
     if output_path.is_dir():
         raise InputError(f"FMU output path {output_path} is a folder; give a file name such as loads.fmu")
-    table = read_playback_table(results_path, signals)
+    source = results_file(results_path)
+    table = read_playback_table(source, signals, whole=whole)
     identifier = model_identifier(model_name or output_path.stem)
     token = instantiation_token(table)
 
-    output_path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="fretwork-fmu-") as work:
+    # locked while written: no other fretwork command writes there meanwhile; partial=(): the one
+    # half-written file, the zip's, is removed by _zip_atomically itself
+    with claim(output_path.parent, clear=False, partial=(), option="-o",
+               ready=lambda: check_output(output_path, source)), \
+            tempfile.TemporaryDirectory(prefix="fretwork-fmu-") as work:
         fmu_dir = Path(work) / "fmu"
         _write_sources(fmu_dir / "sources", fmi_version, identifier)
         (fmu_dir / "resources").mkdir()
@@ -94,6 +119,33 @@ def export_fmu(
         _add_binary(fmu_dir, fmi_version, identifier, compiler)
         _zip_atomically(fmu_dir, output_path)
     return output_path
+
+
+def check_output(output_path: Path, source: Path) -> None:
+    """InputError unless ``output_path`` may take the FMU of the results file ``source``: a name
+    ending in .fmu, not ``source`` itself, and no file there but an FMU fretwork wrote."""
+    if output_path.exists() and source.exists() and os.path.samefile(output_path, source):
+        raise InputError(f"-o {output_path} is the results file being exported: the FMU needs a file of its own, "
+                         f"e.g. -o {source.with_suffix(FMU_SUFFIX)}")
+    if output_path.suffix.lower() != FMU_SUFFIX:
+        raise InputError(f"-o {output_path}: an FMU's file name ends in {FMU_SUFFIX} (the FMI standard's extension, "
+                         f"which importing tools look for); give e.g. -o {output_path.with_suffix(FMU_SUFFIX)}")
+    if os.path.lexists(output_path) and not written_by_fretwork(output_path):
+        raise InputError(f"-o {output_path} exists and is not an FMU that fretwork wrote: it is left alone; give "
+                         "another -o, or move or remove it yourself")
+
+
+def written_by_fretwork(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is an FMU that fretwork wrote: a zip file whose modelDescription.xml names
+    fretwork as its generationTool and whose resources hold the player's table (its magic)."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            tool = ET.fromstring(archive.read("modelDescription.xml")).get("generationTool")
+            with archive.open(f"resources/{TABLE_FILE}") as table:
+                magic = table.read(len(TABLE_MAGIC))
+    except _UNREADABLE:
+        return False
+    return tool == GENERATION_TOOL and magic == TABLE_MAGIC
 
 
 def _write_sources(sources_dir: Path, fmi_version: int, identifier: str) -> None:

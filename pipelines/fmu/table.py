@@ -4,11 +4,15 @@ Signals come from the ``/histories`` group (one output per component, named and 
 the results file) of either results file that holds one: ``fretwork mbs``'s ``run.h5`` (every
 CW over the whole run) or a coupled ``fretwork run``'s ``results.h5`` (the CW that loads the
 contact, over the steady part of the multibody run; :mod:`pipelines.output.results`). A run's
-output folder stands for its ``results.h5``. A coupled run's histories are played as its load
-cycle used them, scaled to its stated wing amplitude (:mod:`pipelines.fmu.scaling`). Files of
-another kind (a sweep, an interface-histories file) are refused, naming what they are and which
-command reads them. The table (``resources/histories.bin``) is laid out as in template/player.c.
-Units follow the results file (fretwork uses mm, N, MPa, t, s, mJ).
+output folder stands for its results file (:func:`results_file`). Both play the steady part of
+the multibody run, where the wing amplitude is measured (:func:`mbs.histories.steady_part`): of
+an mbs run.h5 its second half unless the whole run is asked for, so that the FMU, looped or
+not, does not play the start-up ring-down (at 750 rpm a wing torsion 100 times its settled
+swing). A coupled run's histories are played as its load cycle used them, scaled to its stated
+wing amplitude (:mod:`pipelines.fmu.scaling`). Files of another kind (a sweep, an
+interface-histories file) are refused, naming what they are and which command reads them. The
+table (``resources/histories.bin``) is laid out as in template/player.c. Units follow the
+results file (fretwork uses mm, N, MPa, t, s, mJ).
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import h5py
 import numpy as np
 
 from mbs import histories_file
+from mbs.histories import steady_part
 from mbs.results import SWEEP_FORMAT
 from pipelines.fmu.scaling import LoadScaling, load_scaling
 from reduction.errors import InputError
@@ -45,6 +50,8 @@ OTHER_KINDS = {
     histories_file.FORMAT: "an interface-histories file (docs/histories_format.md), which a coupled scene reads "
                            "through its [coupling] histories key",
 }
+#: the results file of a run's output folder, and the command whose folder holds it
+FOLDER_RESULTS = (("results.h5", "a coupled `fretwork run`"), ("run.h5", "`fretwork mbs`"))
 
 
 @dataclass(frozen=True)
@@ -55,6 +62,8 @@ class PlaybackTable:
     values: (n, m) output values at the samples, in each output's unit.
     names, units, descriptions: (m,) FMI variable name, unit ('' if none) and description.
     scaling: how a coupled run scaled the histories (values are scaled), None if played as stored.
+    multibody_part: of ``fretwork mbs``'s run.h5, "steady" (its steady part, :func:`steady_part`)
+    or "whole"; None for other files, played as stored (a coupled run stores its steady part).
     """
 
     time: np.ndarray
@@ -63,17 +72,36 @@ class PlaybackTable:
     units: tuple[str, ...]
     descriptions: tuple[str, ...]
     scaling: LoadScaling | None = None
+    multibody_part: str | None = None
 
 
-def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] | None = None) -> PlaybackTable:
+def results_file(path: str | os.PathLike) -> Path:
+    """The results file ``path`` names: the file itself, or of a run's output folder its results
+    file (:data:`FOLDER_RESULTS`: a coupled run's results.h5, ``fretwork mbs``'s run.h5)."""
+    path = Path(path)
+    if not path.is_dir():
+        if not path.is_file():
+            raise InputError(f"results file {path} does not exist")
+        return path
+    found = [path / name for name, _ in FOLDER_RESULTS if (path / name).is_file()]
+    if len(found) > 1:
+        held = " and ".join(f"{name} ({command})" for name, command in FOLDER_RESULTS)
+        raise InputError(f"folder {path} holds both {held}: give the file to export")
+    if not found:
+        raise InputError(f"folder {path} holds no results file: give a results file, or the output folder of "
+                         + " or of ".join(f"{command} (its {name})" for name, command in FOLDER_RESULTS))
+    return found[0]
+
+
+def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] | None = None, *,
+                        whole: bool = False) -> PlaybackTable:
     """Read and check the ``/histories`` group; flatten (n, k) signals to k scalar outputs, scaled
     as a coupled run's load cycle used them (:mod:`pipelines.fmu.scaling`).
-    ``results_path``: a results file, or a run's output folder (its ``results.h5``)."""
-    results_path = Path(results_path)
-    if results_path.is_dir() and (results_path / "results.h5").is_file():
-        results_path = results_path / "results.h5"
-    if not results_path.is_file():
-        raise InputError(f"results file {results_path} does not exist")
+    ``results_path``: a results file, or a run's output folder (:func:`results_file`).
+    whole: of ``fretwork mbs``'s run.h5, every sample, the start-up transient included; by default
+    its steady part (:func:`mbs.histories.steady_part`). A coupled run's file holds only the steady
+    part: refused there."""
+    results_path = results_file(results_path)
     try:
         results = h5py.File(results_path, "r")
     except OSError as error:
@@ -87,13 +115,19 @@ def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] 
                 "[coupling]); this run has none"
             )
         histories = results["histories"]
-        time = _read_time(histories, results_path)
+        stored_time = _read_time(histories, results_path)
+        part = _multibody_part(results, whole, results_path)
+        played = steady_part(stored_time.size) if part == "steady" else slice(None)
+        time = stored_time[played]
+        if time.size < 2:
+            raise InputError(f"results file {results_path}: the steady part of the run has a single sample; "
+                             "linear playback needs at least two (export the whole run)")
         available = [name for name, item in histories.items() if name != "time" and isinstance(item, h5py.Dataset)]
         selected = _select_signals(signals, available, results_path)
         scaling = load_scaling(results, time, results_path)
         columns, names, units, descriptions = [], [], [], []
         for signal in selected:
-            data = _read_signal(histories[signal], signal, time)
+            data = _read_signal(histories[signal], signal, stored_time, played)
             if scaling is not None:
                 data = scaling.apply(time, data)
             unit = _text_attribute(histories[signal], "units")
@@ -113,7 +147,21 @@ def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] 
         units=tuple(units),
         descriptions=tuple(descriptions),
         scaling=scaling,
+        multibody_part=part,
     )
+
+
+def _multibody_part(results: h5py.File, whole: bool, results_path: Path) -> str | None:
+    """The part of the multibody run to play: "steady" or "whole" for ``fretwork mbs``'s run.h5
+    (the file with /model, which :func:`mbs.results.write_run` alone writes), None for a file
+    played as stored; InputError for ``whole`` of a coupled run, which stores the steady part only."""
+    if isinstance(results.get("model"), h5py.Group):
+        return "whole" if whole else "steady"
+    if whole and "counterweight" in results["histories"].attrs:
+        raise InputError(f"{results_path} holds only the steady part of its multibody run (what drove the coupled "
+                         "run's loads), not the whole run: the whole run, start-up included, is in the run.h5 of "
+                         "`fretwork mbs`")
+    return None
 
 
 def _refuse_other_kinds(results: h5py.File, results_path: Path) -> None:
@@ -177,7 +225,8 @@ def _select_signals(signals: Sequence[str] | None, available: list[str], results
     return list(signals)
 
 
-def _read_signal(dataset: h5py.Dataset, signal: str, time: np.ndarray) -> np.ndarray:
+def _read_signal(dataset: h5py.Dataset, signal: str, time: np.ndarray, played: slice) -> np.ndarray:
+    """The samples ``played`` of a signal stored at ``time`` (s), as (n_played, k) floats."""
     if signal in PARAMETER_NAMES:
         raise InputError(f"signal name {signal!r} is reserved for an FMU playback variable; rename the dataset")
     if dataset.ndim not in (1, 2) or dataset.shape[0] != time.size:
@@ -187,7 +236,8 @@ def _read_signal(dataset: h5py.Dataset, signal: str, time: np.ndarray) -> np.nda
         )
     if not (np.issubdtype(dataset.dtype, np.integer) or np.issubdtype(dataset.dtype, np.floating)):
         raise InputError(f"signal {signal!r} holds {dataset.dtype} data; only real numbers can be played back")
-    data = np.asarray(dataset[()], dtype=np.float64).reshape(time.size, -1)
+    data = np.asarray(dataset[()], dtype=np.float64).reshape(time.size, -1)[played]
+    time = time[played]
     if data.shape[1] == 0:
         raise InputError(f"signal {signal!r} has no components")
     bad = ~np.isfinite(data)

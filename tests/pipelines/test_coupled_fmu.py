@@ -1,6 +1,7 @@
 """A coupled run's results.h5 holds the multibody histories that drive its loads, in the layout
 of ``fretwork mbs``, and ``fretwork export-fmu`` turns them into an FMU that plays them back as the
-run's load cycle used them: scaled to the stated wing amplitude (``fretwork mbs``'s run.h5 as it is)."""
+run's load cycle used them: scaled to the stated wing amplitude (``fretwork mbs``'s run.h5 as it is,
+its steady part by default)."""
 
 from pathlib import Path
 
@@ -9,7 +10,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from mbs.loading import MultibodyLoading, cycle_loading, harmonic_fit
+from mbs.loading import MultibodyLoading, cycle_loading, harmonic_fit, run_loading
 from mbs.parameters import ModelParams, SolverParams
 from mbs.results import MODAL_UNITS, write_loading_histories
 from mbs.run import run_model
@@ -190,16 +191,26 @@ def test_the_fmu_plays_the_load_cycle_the_run_used(run, request):
                                    atol=interpolation * swing + 1e-9 * np.abs(expected).max(), err_msg=pattern)
 
 
-def test_the_fmu_of_an_mbs_run_plays_its_histories_as_they_are(tmp_path):
+def test_the_fmu_of_an_mbs_run_plays_its_steady_part_as_it_is(tmp_path):
+    """The steady part a coupled run takes from the same multibody run (mbs.loading.run_loading),
+    unscaled; whole=True plays the run from its start."""
     params = ModelParams(n_modes=2, solver=SolverParams(revolutions=2.0, time_step=1e-4))
-    results = run_model(params, tmp_path).results_file
-    fmu = export_fmu(results, tmp_path / "mbs.fmu", ["cw1_wing_torsion", "cw1_frame_acceleration"])
-    table = read_playback_table(results, ["cw1_wing_torsion", "cw1_frame_acceleration"])
+    outputs = run_model(params, tmp_path)
+    results = outputs.results_file
+    signals = ["cw1_wing_torsion", "cw1_frame_acceleration"]
+    fmu = export_fmu(results, tmp_path / "mbs.fmu", signals)
+    table = read_playback_table(results, signals)
+    loading = run_loading(params, outputs.reduced, outputs.histories, 1)
+    assert table.scaling is None and np.array_equal(table.time, loading.time)
+    assert np.array_equal(table.values, np.column_stack([loading.wing_torsion, loading.frame_acceleration]))
+    assert read_model_description(str(fmu)).description.startswith(
+        f"Playback of 4 load history outputs sampled at {loading.time.size} times, the steady second half of "
+        f"the multibody run (from t = {loading.time[0]:.6g} s)")
+    whole = read_playback_table(results, signals, whole=True)
     with h5py.File(results) as file:
         stored = np.column_stack([file["histories/cw1_wing_torsion"][()], file["histories/cw1_frame_acceleration"][()]])
-    assert table.scaling is None and np.array_equal(table.values, stored)
-    assert read_model_description(str(fmu)).description == (
-        f"Playback of 4 load history outputs sampled at {table.time.size} times")
+        assert np.array_equal(whole.time, file["histories/time"][()])
+    assert whole.scaling is None and np.array_equal(whole.values, stored)
 
 
 def test_export_fmu_of_an_uncoupled_run_says_where_histories_are(coarse_cylinder, tmp_path, capsys):
