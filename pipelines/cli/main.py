@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from pipelines import interrupts
-from reduction.errors import InputError
+from reduction.errors import InputError, listed
 
 
 def _json(value) -> str:
@@ -195,12 +195,15 @@ def cmd_limit(args) -> int:
 def cmd_sweep(args) -> int:
     """`fretwork sweep`: the multibody speed sweep; with --margins also the amplitude limit and the margins."""
     if not args.margins:
+        if args.margins_only:
+            _warn(f"{listed(args.margins_only)} {'is' if len(args.margins_only) == 1 else 'are'} for --margins "
+                  "only: ignored (the sweep runs without the amplitude limit and the margins)")
         return args.multibody_handler(args)
     from pipelines.jobs.sweep import parse_speeds, sweep_paths
     from pipelines.jobs.limit import parse_range_um
     from pipelines.jobs.margins import describe_margins, margin_sweep, plot_margins
     from pipelines import scene as scenes
-    from pipelines.cli.mbs import model_params, sweep_warnings
+    from pipelines.cli.mbs import crossing_lines, model_params, sweep_summary, sweep_warnings
 
     speeds = parse_speeds(args.speeds)
     for message in sweep_warnings(model_params(args.scene), speeds, args.speeds):
@@ -208,12 +211,15 @@ def cmd_sweep(args) -> int:
     low, high = parse_range_um(args.amplitude)
     name = scenes.load(args.scene).name
     folder, out = sweep_paths(args.out)
-    result, _ = margin_sweep(args.scene, speeds, amplitude_range_mm=(low, high), tolerance_mm=1e-3 * args.tolerance,
-                             cache_dir=_cache(args), sweep_path=out, out_dir=folder / "limit_runs",
-                             scheduler=args.scheduler, workers=args.workers, progress=not getattr(args, "quiet", False))
-    plot = plot_margins(result, (Path(args.plots) if args.plots else folder) / "margins.png",
-                        f"{name}: fretting safety margin")
-    summary = dict(result.to_json(), file=str(out), plot=str(plot))
+    result, sweep = margin_sweep(args.scene, speeds, amplitude_range_mm=(low, high),
+                                 tolerance_mm=1e-3 * args.tolerance, cache_dir=_cache(args), sweep_path=out,
+                                 out_dir=folder / "limit_runs", scheduler=args.scheduler, workers=args.workers,
+                                 progress=not getattr(args, "quiet", False))
+    plots = Path(args.plots) if args.plots else folder
+    # the multibody sweep as plain `sweep` reports it (uncalibrated amplitudes, mm, every CW)
+    swept = sweep_summary(sweep, out, plots)
+    plot = plot_margins(result, plots / "margins.png", f"{name}: fretting safety margin")
+    summary = dict(result.to_json(), file=str(out), plot=str(plot), sweep=swept)
     if args.json:
         print(_json(summary))
     else:
@@ -226,7 +232,9 @@ def cmd_sweep(args) -> int:
               f"calibration factor {result.calibration:.4g} (the scene's stated wing amplitude / the multibody "
               f"wing amplitude at its own speed: every speed's multibody amplitude is multiplied by it)")
         print(describe_margins(result))
-        print(f"results: {out}, plot: {plot}")
+        for line in crossing_lines(sweep):
+            print(line)
+        print(f"results: {out}, plots: {plot}, {', '.join(swept['plots'].values())}")
     return 0
 
 
@@ -384,14 +392,26 @@ def build_parser() -> argparse.ArgumentParser:
     sweep = add_sweep_parser(sub)
     sweep.add_argument("--margins", action="store_true",
                        help="also find the amplitude limit of the coupled scene and report limit / amplitude per speed")
-    sweep.add_argument("--amplitude", default="50:500", metavar="LOW:HIGH",
+    sweep.add_argument("--amplitude", default="50:500", metavar="LOW:HIGH", action=_MarginsOnly,
                        help="with --margins: wing amplitude range of the limit search, µm (default %(default)s)")
-    sweep.add_argument("--tolerance", type=float, default=10.0, help="with --margins: limit tolerance, µm")
-    sweep.add_argument("--quiet", action="store_true", help="with --margins: no progress bars")
+    sweep.add_argument("--tolerance", type=float, default=10.0, action=_MarginsOnly,
+                       help="with --margins: limit tolerance, µm")
+    sweep.add_argument("--quiet", nargs=0, default=False, const=True, action=_MarginsOnly,
+                       help="with --margins: no progress bars")
     _add_cache_arguments(sweep)
-    sweep.set_defaults(multibody_handler=sweep.get_default("handler"), handler=cmd_sweep)
+    sweep.set_defaults(multibody_handler=sweep.get_default("handler"), handler=cmd_sweep, margins_only=[])
     add_run_parser(sub)
     return parser
+
+
+class _MarginsOnly(argparse.Action):
+    """An option of `sweep` that means something with --margins only: stored as usual, and its
+    name kept in ``args.margins_only``, so that a sweep without --margins says it is ignored."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
+        given = getattr(namespace, "margins_only", [])
+        namespace.margins_only = given if option_string in given else [*given, option_string]
 
 
 def _add_run_parser(sub) -> None:
@@ -565,7 +585,8 @@ def _check_input(args) -> None:
     from pipelines import scene as scenes
     from pipelines.scene.checks import plausibility
 
-    if isinstance(getattr(args, "amplitude", None), str):
+    # `sweep` ignores --amplitude and --tolerance without --margins (cmd_sweep says so)
+    if isinstance(getattr(args, "amplitude", None), str) and getattr(args, "margins", True):
         from pipelines.jobs.limit import check_search, parse_range_um
         low, high = parse_range_um(args.amplitude)
         if isinstance(getattr(args, "tolerance", None), (int, float)):
@@ -615,15 +636,17 @@ def _output(args):
         return nullcontext()
     outputs = OUTPUTS.get(_command(args), ())
     clear = not getattr(args, "resume", False) and args.command not in WRITTEN_ANEW
-    if args.command == "sweep":
-        from pipelines.jobs.sweep import sweep_paths
+    if args.command in ("sweep", "mbs"):
+        from pipelines.cli.mbs import RUN_FILE
+        from pipelines.jobs.sweep import SWEEP_FILE, output_paths
 
-        folder, path = sweep_paths(out)
-        if path.parent == folder and folder != Path(out):
+        name = SWEEP_FILE if args.command == "sweep" else RUN_FILE
+        folder, path = output_paths(out, name)
+        if folder != Path(out):
             print(f"fretwork: note: --out {out} names a file: written, with the plots beside it "
-                  f"(--out is a folder for every command: --out {folder} writes {folder / 'sweep.h5'})",
+                  f"(--out is a folder for every command: --out {folder} writes {folder / name})",
                   file=sys.stderr)
-            outputs = ()  # the folder holds more than this sweep: nothing else is removed
+            outputs = ()  # the folder holds more than this command's outputs: nothing else is removed
         out = folder
     # only `run` resumes: elsewhere a checkpoint of an interrupted run is a half-written output
     partial = PARTIAL if args.command == "run" else (*PARTIAL, "**/checkpoint.h5")

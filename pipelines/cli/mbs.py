@@ -1,7 +1,8 @@
 """Command-line parts of the multibody model.
 
 `fretwork sweep SCENE.toml --speeds 500:800:10 [--json] [--scheduler tcp://HOST:PORT] [--workers N]`:
-engine-speed sweep, the speeds as parallel dask cases (add_sweep_parser / run_sweep).
+engine-speed sweep, the speeds as parallel dask cases (add_sweep_parser / run_sweep; sweep_summary
+draws and reports a sweep, for `sweep --margins` too).
 `fretwork mbs SCENE.toml [--out DIR] [--json] [--interface-histories FILE [--counterweight N]]`: one
 run at the scene's speed with HDF5 histories, spectra, Campbell diagram and plots, and optionally
 one CW's interface histories (mbs.histories_file; .h5 or .csv) for a scene's
@@ -12,6 +13,7 @@ and calls args.handler(args). Summaries go to stdout (JSON with --json), progres
 from __future__ import annotations
 
 import json
+import os
 import sys
 import tomllib
 from pathlib import Path
@@ -23,10 +25,13 @@ from mbs.model import SimulationError
 from mbs.parameters import ModelParams
 from mbs.plots import plot_campbell, plot_sweep
 from mbs.run import run_model
-from pipelines.jobs.sweep import check_resolution, parse_speeds, speed_sweep, sweep_paths
+from mbs.sweep import SweepResult
+from pipelines.jobs.sweep import check_resolution, output_paths, parse_speeds, speed_sweep, sweep_paths
 from pipelines.parallel import add_cluster_arguments
 from pipelines.scene.checks import engine_speed_warnings
 from reduction.errors import InputError
+
+RUN_FILE = "run.h5"  # what mbs.run.run_model writes in its folder
 
 
 def model_params(path) -> ModelParams:
@@ -74,7 +79,9 @@ def add_sweep_parser(subparsers):
     parser.add_argument("--speeds", required=True, help="START:STOP:STEP or a comma list, rpm (e.g. 500:800:10)")
     parser.add_argument("--out", default="results/sweep",
                         help="output folder: sweep.h5 and the plots (default: %(default)s; a name ending .h5 is the file)")
-    parser.add_argument("--plots", default=None, help="folder for sweep and Campbell PNG plots (default: beside --out)")
+    parser.add_argument("--plots", default=None,
+                        help="folder for the PNG plots: wing amplitude over speed, Campbell diagram and, with "
+                             "--margins, margins (default: the --out folder)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
     add_cluster_arguments(parser)
     parser.set_defaults(handler=run_sweep)
@@ -90,16 +97,34 @@ def _table(result) -> str:
             "NOT STEADY (amplitude not to be trusted)" if float(speed) in (result.unsettled or {}) else
             "order/mode crossing" if result.resonance[i] else "")
         lines.append(f"{speed:8.1f} {amplitude[0]:12.3f} {amplitude[1]:12.3f} {f[0]:9.1f} {f[1]:9.1f}  {note}")
-    for crossing in result.crossings:
-        lines.append(f"crossing: order {crossing['order']:g} meets mode {crossing['mode'] + 1} at "
-                     f"{crossing['speed_rpm']:.1f} rpm ({crossing['frequency_hz']:.1f} Hz)")
-    return "\n".join(lines)
+    return "\n".join(lines + crossing_lines(result))
+
+
+def crossing_lines(result: SweepResult) -> list[str]:
+    """One line per order/mode crossing of the sweep."""
+    return [f"crossing: order {crossing['order']:g} meets mode {crossing['mode'] + 1} at "
+            f"{crossing['speed_rpm']:.1f} rpm ({crossing['frequency_hz']:.1f} Hz)" for crossing in result.crossings]
 
 
 def sweep_warnings(params: ModelParams, speeds, written: str) -> list[str]:
     """The warnings of a sweep's speeds (``written``: as the user gave them): a likely unit
-    mistake, and a time step too coarse for the gear mesh at the fastest of them."""
-    return engine_speed_warnings(speeds, f"--speeds {written}") + check_resolution(params, speeds)
+    mistake (on their own, and beside the scene's own engine speed ``params.speed_rpm``), and a time
+    step too coarse for the gear mesh at the fastest of them."""
+    return (engine_speed_warnings(speeds, f"--speeds {written}", reference_rpm=params.speed_rpm)
+            + check_resolution(params, speeds))
+
+
+def sweep_summary(result: SweepResult, path, plots) -> dict:
+    """Draw the sweep's plots into the folder ``plots`` (wing amplitude over speed with the
+    crossings, Campbell diagram) and return its summary: the figures of ``--json``
+    (:meth:`SweepResult.to_json`), the file ``path`` and the plots. `sweep` and `sweep --margins`
+    both report a sweep with it."""
+    plots = Path(plots)
+    crossing_speeds = [c["speed_rpm"] for c in result.crossings]
+    drawn = {"wing_amplitude": plot_sweep(result.speeds_rpm, result.wing_amplitude, plots / "sweep_wing_amplitude.png",
+                                          crossings_rpm=crossing_speeds),
+             "campbell": plot_campbell(result.campbell, plots / "campbell.png")}
+    return dict(result.to_json(), file=str(path), plots={name: str(drawn[name]) for name in drawn})
 
 
 def run_sweep(args) -> int:
@@ -115,17 +140,12 @@ def run_sweep(args) -> int:
     except InputError as error:
         print(f"fretwork: error: {error}", file=sys.stderr)
         return 2
-    plots = Path(args.plots) if args.plots else folder
-    crossing_speeds = [c["speed_rpm"] for c in result.crossings]
-    plot_sweep(result.speeds_rpm, result.wing_amplitude, plots / "sweep_wing_amplitude.png", crossings_rpm=crossing_speeds)
-    plot_campbell(result.campbell, plots / "campbell.png")
+    summary = sweep_summary(result, path, Path(args.plots) if args.plots else folder)
     if args.json:
-        summary = result.to_json()
-        summary["file"] = str(path)
         print(json.dumps(summary, indent=2))
     else:
         print(_table(result))
-        print(f"results: {path}")
+        print(f"results: {path}, plots: {', '.join(summary['plots'].values())}")
     for message in (result.unsettled or {}).values():
         print(f"fretwork: warning: {message}", file=sys.stderr)
     return 0 if np.isfinite(result.wing_amplitude).any() else 1
@@ -137,7 +157,8 @@ def add_run_parser(subparsers):
         "mbs", help="one run of the crankshaft-counterweight model (histories, spectra, Campbell)",
         description="Simulate the scene's [mbs] model at its engine speed; write run.h5 (/histories) and PNGs.")
     parser.add_argument("scene", help="scene TOML file (its [mbs] table sets the model)")
-    parser.add_argument("--out", default="results/mbs", help="output folder (default: %(default)s)")
+    parser.add_argument("--out", default="results/mbs",
+                        help=f"output folder: {RUN_FILE} and the plots (default: %(default)s; a name ending .h5 is the file)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
     parser.add_argument("--interface-histories", default=None, metavar="FILE",
                         help="also write one CW's interface histories (.h5 or .csv, docs/histories_format.md), "
@@ -151,20 +172,26 @@ def add_run_parser(subparsers):
 
 def run_single(args) -> int:
     """One run; 0 on success, 1 if the time integration failed, 2 on bad input."""
+    folder, path = output_paths(args.out, RUN_FILE)
     try:
         params = model_params(args.scene)
         counterweight = _counterweight(args, params)
         resolution_warnings = check_resolution(params, [params.speed_rpm])
+        if path.name != RUN_FILE and (folder / RUN_FILE).exists():
+            raise InputError(f"--out {args.out}: the run writes {folder / RUN_FILE} and then renames it, but that "
+                             f"file exists: move it, or give --out another folder")
     except InputError as error:
         print(f"fretwork: error: {error}", file=sys.stderr)
         return 2
     for message in resolution_warnings:
         print(f"fretwork: warning: {message}", file=sys.stderr)
     try:
-        outputs = run_model(params, args.out)
+        outputs = run_model(params, folder)
     except SimulationError as error:
         print(f"fretwork: error: the simulation stopped: {error}", file=sys.stderr)
         return 1
+    if Path(outputs.results_file) != path:  # --out named the file (output_paths)
+        os.replace(outputs.results_file, path)
     histories = outputs.histories
     interface = None
     if args.interface_histories:
@@ -180,8 +207,8 @@ def run_single(args) -> int:
                   "without its cells: a scene reads them back only with that mesh as its CW; write .h5, "
                   "which keeps the cells, to drive another CW mesh", file=sys.stderr)
     summary = {
-        "file": str(outputs.results_file),
-        "plots": {name: str(path) for name, path in outputs.plots.items()},
+        "file": str(path),
+        "plots": {name: str(plot) for name, plot in outputs.plots.items()},
         "speed_rpm": params.speed_rpm,
         "wing_amplitude_mm": histories.wing_amplitude.tolist(),
         "unsettled_change": histories.unsettled_change,

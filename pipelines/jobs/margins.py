@@ -174,11 +174,17 @@ def plot_margins(result: MarginResult, path: Path, title: str) -> Path:
 
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
     top.plot(result.speeds_rpm, 1e3 * result.wing_amplitude_mm, "-", color="0.6", label="wing amplitude")
+    searched = f"searched at {result.limit_speed_rpm:.0f} rpm"
     if result.limit.limit_mm is not None:
         top.axhline(1e3 * result.limit.limit_mm, color="tab:red", linestyle="--",
-                    label=f"stick limit {1e3 * result.limit.limit_mm:.0f} µm")
+                    label=f"stick limit {1e3 * result.limit.limit_mm:.0f} µm ({searched})")
+    else:  # every amplitude of the range stuck: the margins are lower bounds, divided by its top
+        top.axhline(1e3 * result.limit.margin_limit_mm, color="tab:red", linestyle=":",
+                    label=f"stick limit above {1e3 * result.limit.margin_limit_mm:.0f} µm, the searched range ({searched})")
     top.set_ylabel("wing amplitude (µm)")
-    top.legend()
+    low, high = top.get_ylim()
+    top.set_ylim(low, high + 0.25 * (high - low))  # room for the legend above the limit line
+    top.legend(loc="upper right")
     top.grid(True, alpha=0.3)
     bottom.plot(result.speeds_rpm, result.margin, "-", color="0.6", zorder=1)
     colours = {"safe": "tab:green", "at the limit": "tab:orange", "unsafe": "tab:red"}

@@ -24,13 +24,19 @@ from reduction.errors import InputError, listed
 SWEEP_FILE = "sweep.h5"
 
 
-def sweep_paths(out) -> tuple[Path, Path]:
-    """The sweep's output folder and file for ``--out``: a folder holds ``sweep.h5`` and the plots;
-    the older form, a file name ending in .h5, still names the file (the plots go beside it)."""
+def output_paths(out, name: str) -> tuple[Path, Path]:
+    """A multibody command's output folder and results file for ``--out``: a folder holds the file
+    ``name`` and the plots; a name ending in .h5 or .hdf5 (the sweep's older form) names the
+    file, and the plots go beside it."""
     out = Path(out)
     if out.suffix in (".h5", ".hdf5"):
         return out.parent, out
-    return out, out / SWEEP_FILE
+    return out, out / name
+
+
+def sweep_paths(out) -> tuple[Path, Path]:
+    """The sweep's output folder and file for ``--out`` (:func:`output_paths` of ``sweep.h5``)."""
+    return output_paths(out, SWEEP_FILE)
 
 
 def parse_speeds(text: str) -> np.ndarray:

@@ -386,25 +386,94 @@ def _speeds_text(speeds) -> str:
     return f"{listed([format(v, 'g') for v in values])} rpm {'is' if len(values) == 1 else 'are'}"
 
 
-def engine_speed_warnings(speeds, named: str) -> list[str]:
+#: A sweep's speeds that all lie below 1/OTHER_UNIT_RATIO of the scene's own engine speed, or all
+#: above OTHER_UNIT_RATIO times it, are most likely in another unit than that speed. Read as rpm,
+#: speeds in rad/s are 60/2π ≈ 9.55 times too low and speeds in Hz 60 times: a sweep about a 750 rpm
+#: engine written in rad/s (62.8-94.2) lies wholly below a fifth of 750 as long as its fastest speed
+#: stays below 1.9 times the engine's, which a sweep about an operating speed does. Real speeds
+#: wholly below a fifth of the engine's speed would all lie at or below its idle speed (engines with
+#: bolted counterweights idle at about 20-40 % of their rated speed), where fretting margins are not
+#: asked for. The other way round, a sweep wholly above five times the scene's speed means that
+#: speed, at which a coupled scene is calibrated, is below idle: it is itself most likely in rad/s
+#: or Hz (78.5 rad/s is 750 rpm), or the sweep is in °/s (6 times too high). A factor of 5 keeps a
+#: wide sweep (a run-up from a fifth of the speed) unremarked. A unit is named only if, read in
+#: it, the speeds' geometric middle lies within a factor of UNIT_MATCH of the scene's speed (the
+#: middle of a sweep from half to twice an operating speed is that speed); speeds that no unit
+#: brings near it (1-2 rpm beside 750 rpm) are judged on their own (SLOWEST_ENGINE_RPM …).
+OTHER_UNIT_RATIO = 5.0
+UNIT_MATCH = 2.0
+#: rpm per unit of the units a speed is likely written in instead of rpm
+_RPM_PER = {"rad/s": 30.0 / math.pi, "Hz": 60.0, "°/s": 1.0 / 6.0}
+
+
+def engine_speed_warnings(speeds, named: str, reference_rpm: float | None = None,
+                          reference_named: str = "[mbs] speed_rpm") -> list[str]:
     """Warnings about engine speeds (rpm) that are likely a unit mistake, at most one for those
-    too slow and one for those too fast (:data:`SLOWEST_ENGINE_RPM`, :data:`FASTEST_ENGINE_RPM`);
-    ``named`` says where they were given ('[mbs] speed_rpm', '--speeds 5:20:5')."""
+    too slow and one for those too fast; ``named`` says where they were given ('[mbs] speed_rpm',
+    '--speeds 5:20:5').
+
+    Without a reference, too slow and too fast are outside :data:`SLOWEST_ENGINE_RPM` …
+    :data:`FASTEST_ENGINE_RPM`. With ``reference_rpm``, the engine speed of the same scene
+    (``reference_named``: its key), speeds that all lie further than :data:`OTHER_UNIT_RATIO` below
+    or above it are said instead, in one warning naming both speeds and the likely unit."""
     speeds = [float(v) for v in speeds if _number(v) and math.isfinite(v) and v > 0]
+    relative = _other_unit_than_reference(speeds, named, float(reference_rpm), reference_named) \
+        if _number(reference_rpm) and math.isfinite(reference_rpm) and reference_rpm > 0 and speeds else None
+    side, found = (None, []) if relative is None else (relative[0], [relative[1]])
     slow = [v for v in speeds if v < SLOWEST_ENGINE_RPM]
     fast = [v for v in speeds if v > FASTEST_ENGINE_RPM]
-    found = []
-    if slow:
+    if slow and side != "below":
         v = min(slow)
         found.append(f"{named}: {_speeds_text(slow)} below {SLOWEST_ENGINE_RPM:g} rpm, slower than any engine "
                      f"runs: probably Hz or rad/s (rpm expected: {v:g} Hz is {60 * v:g} rpm, {v:g} rad/s is "
                      f"{30 * v / math.pi:.4g} rpm)")
-    if fast:
+    if fast and side != "above":
         v = max(fast)
         found.append(f"{named}: {_speeds_text(fast)} above {FASTEST_ENGINE_RPM:,.0f} rpm, faster than any engine "
                      f"with bolted counterweights runs: probably °/s or a digit too many (rpm expected: "
                      f"{v:g} °/s is {v / 6:.4g} rpm)")
     return found
+
+
+def _runs(rpm) -> bool:
+    """Whether every speed (rpm) is one an engine with bolted counterweights runs at."""
+    return all(SLOWEST_ENGINE_RPM <= v <= FASTEST_ENGINE_RPM for v in rpm)
+
+
+def _range(speeds, unit: str) -> str:
+    """'62.8 to 94.2 rad/s is 599.7 to 899.5 rpm': the lowest and highest of speeds read in unit."""
+    low, high = min(speeds), max(speeds)
+    if low == high:
+        return f"{low:g} {unit} is {low * _RPM_PER[unit]:.4g} rpm"
+    return f"{low:g} to {high:g} {unit} is {low * _RPM_PER[unit]:.4g} to {high * _RPM_PER[unit]:.4g} rpm"
+
+
+def _other_unit_than_reference(speeds, named: str, reference: float, reference_named: str):
+    """('below' or 'above', the warning) for speeds that all lie further than OTHER_UNIT_RATIO
+    from the reference speed; None if they do not, or if no unit makes engine speeds near it of them.
+    Below, the speeds are in rad/s or Hz; above, in °/s, or the reference is in rad/s or Hz. Of
+    the units that give engine speeds, the one said is that whose ratio of speeds to reference
+    lies nearest (on a log scale) that of the speeds' geometric middle, if within UNIT_MATCH."""
+    middle = math.exp(sum(math.log(v) for v in speeds) / len(speeds))
+    if max(speeds) < reference / OTHER_UNIT_RATIO:
+        side, suspects = "below", [(u, 1.0 / _RPM_PER[u]) for u in ("rad/s", "Hz")
+                                   if _runs([v * _RPM_PER[u] for v in speeds])]
+    elif min(speeds) > reference * OTHER_UNIT_RATIO:
+        side, suspects = "above", [(u, 1.0 / _RPM_PER[u]) for u in ("°/s",) if _runs([v * _RPM_PER[u] for v in speeds])]
+        suspects += [(u, _RPM_PER[u]) for u in ("rad/s", "Hz") if _runs([reference * _RPM_PER[u]])]
+    else:
+        return None
+    mismatch = {unit: abs(math.log(middle / reference / ratio)) for unit, ratio in suspects}
+    unit = min(mismatch, key=mismatch.get, default=None)
+    if unit is None or mismatch[unit] > math.log(UNIT_MATCH):
+        return None
+    said = (f"{named}: {_speeds_text(speeds)} {'' if len(speeds) == 1 else 'all '}"
+            f"{'below a fifth of' if side == 'below' else 'above five times'} the scene's engine speed "
+            f"({reference_named} = {reference:g} rpm): ")
+    if side == "below" or unit == "°/s":
+        return side, said + f"probably {unit} (rpm expected: {_range(speeds, unit)}, about the scene's {reference:g} rpm)"
+    return side, said + (f"probably {reference_named} is in {unit} (rpm expected: {_range([reference], unit)}; "
+                         f"the sweep runs at {min(speeds):g}{'' if len(set(speeds)) == 1 else f' to {max(speeds):g}'} rpm)")
 
 
 def _material_warnings(name, material) -> list[str]:

@@ -65,9 +65,9 @@ def test_fretwork_sweep_warns_once_of_its_speeds(tmp_path, monkeypatch, capsys):
     scene = _scene(tmp_path, 750.0)
     assert main(["sweep", str(scene), "--speeds", "10,12.5", "--workers", "0", "--out", str(tmp_path / "out")]) == 2
     error = capsys.readouterr().err
-    assert error.count("warning") == 1
-    assert ("fretwork: warning: --speeds 10,12.5: 10 and 12.5 rpm are below 30 rpm, slower than any engine runs: "
-            "probably Hz or rad/s (rpm expected: 10 Hz is 600 rpm") in error
+    assert error.count("warning") == 1  # beside the scene's 750 rpm they are Hz (tests/pipelines/test_sweep_outputs.py)
+    assert ("fretwork: warning: --speeds 10,12.5: 10 and 12.5 rpm are all below a fifth of the scene's engine speed "
+            "([mbs] speed_rpm = 750 rpm): probably Hz (rpm expected: 10 to 12.5 Hz is 600 to 750 rpm") in error
     assert "stopped by the test" in error
 
 
@@ -78,5 +78,5 @@ def test_fretwork_sweep_with_margins_warns_once_of_its_speeds(tmp_path, capsys):
                  "--out", str(tmp_path / "out")]) == 2
     error = capsys.readouterr().err
     assert error.count("warning") == 1
-    assert "fretwork: warning: --speeds 10,12.5: 10 and 12.5 rpm are below 30 rpm" in error
+    assert "fretwork: warning: --speeds 10,12.5: 10 and 12.5 rpm are all below a fifth" in error
     assert "fretwork: error:" in error
