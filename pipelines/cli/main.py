@@ -224,7 +224,8 @@ def cmd_sweep(args) -> int:
         print(_json(summary))
     else:
         print(f"{'rpm':>8} {'wing µm':>9} {'margin':>8}")
-        flags = {"unsafe": "  < 1: UNSAFE", "at the limit": "  at the limit (within the tolerance)", "safe": ""}
+        flags = {"unsafe": "  < 1: UNSAFE", "at the limit": "  at the limit (within the tolerance)", "safe": "",
+                 "not judged": "  not judged: the multibody run failed"}
         for k, (speed, amplitude, margin) in enumerate(zip(result.speeds_rpm, result.wing_amplitude_mm, result.margin)):
             print(f"{speed:8.1f} {1e3 * amplitude:9.1f} {margin:8.2f}{flags[result.state(k)]}")
         limit = "above the searched range" if summary["limit_um"] is None else f"{summary['limit_um']:.1f} µm"

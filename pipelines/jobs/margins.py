@@ -45,6 +45,11 @@ class MarginResult:
     warnings: tuple = ()
 
     @property
+    def failed(self) -> np.ndarray:
+        """Speeds whose multibody run failed: no wing amplitude, no margin (bool, (n,))."""
+        return np.isnan(self.wing_amplitude_mm)
+
+    @property
     def unsafe(self) -> np.ndarray:
         """Speeds whose margin is below 1: the wing vibration exceeds the stick limit (bool, (n,))."""
         return np.isfinite(self.margin) & (self.margin < 1.0)
@@ -58,13 +63,17 @@ class MarginResult:
         return np.abs(self.wing_amplitude_mm - self.limit.limit_mm) <= self.limit.tolerance_mm
 
     def state(self, k: int) -> str:
-        """'unsafe', 'at the limit' or 'safe' at the k-th speed."""
+        """'not judged' (the multibody run failed), 'unsafe', 'at the limit' or 'safe' at the
+        k-th speed."""
+        if self.failed[k]:
+            return "not judged"
         return "unsafe" if self.unsafe[k] else "at the limit" if self.at_limit[k] else "safe"
 
     def to_json(self) -> dict:
         return {
             "unsafe_speeds": self.speeds_rpm[self.unsafe].tolist(),
             "at_limit_speeds": self.speeds_rpm[self.at_limit].tolist(),
+            "failed_speeds": self.speeds_rpm[self.failed].tolist(),
             "speeds_rpm": self.speeds_rpm.tolist(),
             "wing_amplitude_um": (1e3 * self.wing_amplitude_mm).tolist(),
             "calibration_factor": self.calibration,
@@ -85,12 +94,20 @@ def _rpm(speeds) -> str:
 def describe_margins(result: MarginResult) -> str:
     """One line: the unsafe speeds (margin below 1) and those at the limit, or that all are safe."""
     unsafe, at_limit = result.speeds_rpm[result.unsafe], result.speeds_rpm[result.at_limit & ~result.unsafe]
+    failed = result.speeds_rpm[result.failed]
     parts = []
+    if failed.size:
+        parts.append(f"NOT JUDGED at {_rpm(failed)}: the multibody run failed there (the sweep's failures), "
+                     "so there is no wing amplitude to judge")
     if unsafe.size:
         parts.append(f"UNSAFE at {_rpm(unsafe)}: the wing vibration exceeds the stick limit (margin below 1)")
     if at_limit.size:
         parts.append(f"at the limit at {_rpm(at_limit)} (within the limit's tolerance)")
-    said = "; ".join(parts) if parts else "safe at every speed (every margin at least 1)"
+    if not parts:
+        said = "safe at every speed (every margin at least 1)"
+    else:
+        said = "; ".join(parts) + ("; safe at the others" if failed.size and not (unsafe.size or at_limit.size)
+                                   and failed.size < len(result.speeds_rpm) else "")
     if result.warnings:
         said += f"; WARNING, {len(result.warnings)} amplitude(s) not to be trusted: " + " | ".join(result.warnings)
     return said
@@ -140,7 +157,9 @@ def margins_of(scene, sweep, limit: LimitResult, cache) -> MarginResult:
     counterweight = CouplingSettings.of(scene).counterweight - 1
     factor, calibration_warning = calibration_factor(scene, cache)
     amplitude = factor * sweep.wing_amplitude[:, counterweight]
+    # no vibration: an infinite margin; a failed multibody run (NaN amplitude): no margin at all
     margin = np.divide(limit.margin_limit_mm, amplitude, out=np.full_like(amplitude, np.inf), where=amplitude > 0)
+    margin[np.isnan(amplitude)] = np.nan
     speeds = np.asarray(sweep.speeds_rpm, dtype=float)
     warnings = [f"calibration: {calibration_warning}"] if calibration_warning else []
     warnings += list((sweep.unsettled or {}).values())
@@ -195,6 +214,10 @@ def plot_margins(result: MarginResult, path: Path, title: str) -> Path:
             label = "unsafe: margin < 1" if state == "unsafe" else state
             bottom.scatter(result.speeds_rpm[chosen], result.margin[chosen], color=colour, label=label, zorder=2)
             top.scatter(result.speeds_rpm[chosen], 1e3 * result.wing_amplitude_mm[chosen], color=colour, zorder=3)
+    for k, speed in enumerate(result.speeds_rpm[result.failed]):  # no amplitude to draw: the speed is marked
+        for axis in (top, bottom):
+            axis.axvline(speed, color="0.5", linestyle=":", linewidth=1.2,
+                         label="multibody run failed: not judged" if k == 0 and axis is bottom else None)
     bottom.axhline(1.0, color="tab:red", linewidth=1)
     bottom.legend(loc="best")
     bottom.set_ylabel("safety margin (limit / amplitude)")
