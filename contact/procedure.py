@@ -27,7 +27,7 @@ import numpy as np
 from contact.cycle_jump import AdaptiveJump, local_stiffness, next_jump, wear_rate
 from contact.law import ContactState, Status, utilised_cof
 from contact.solver import ContactSolver, ConvergenceError, Effects, Equilibrium
-from contact.verdict import (Ending, active_slip_area_fraction, cycle_figures, loosening_evident,
+from contact.verdict import (Ending, active_slip_area_fraction, clamp_lost, cycle_figures, loosening_evident,
                              loosening_window_blocks, verdict)
 
 PHASES = ("preload", "cof", "wear")
@@ -94,6 +94,9 @@ class Procedure:
     up, over many cycles: the COF hardens as the vibration grows, instead of a step to full
     amplitude that can exceed the friction capacity at μ0 before the COF has risen); 0: full
     amplitude from the first cycle. Shakedown is not judged before the run-up ends.
+    clamp_loss_limit: a bolted joint that has lost this fraction of its clamp force (the bolts'
+    summed force after the preload) has loosened, in any phase and whatever the trend
+    (:func:`contact.verdict.clamp_lost`): loosening is then evident at once.
     stop_at_loosening: end the run as soon as loosening is evident (:func:`loosening_evident`);
     False runs the wear phase on to ``life_cycles`` (or ``wear_cycles``) so that the clamp-force
     trend of a loosening joint is seen over the whole horizon; the verdict is the same.
@@ -114,6 +117,7 @@ class Procedure:
     loosening_window: int = 20
     loosening_window_cycles: float | None = None
     stop_at_loosening: bool = True
+    clamp_loss_limit: float = 0.5
     area_tolerance: float = 0.01
     slip_tolerance: float = 0.1
 
@@ -385,7 +389,11 @@ class _Run:
             running_up = self.vibration(phase, self.cycle_number - 1) < 1.0  # began below full amplitude
             self.quiet_cycles = 0 if slid or running_up else self.quiet_cycles + 1
             loosening = False
-            if self.quiet_cycles >= self.procedure.stationary_window:
+            if clamp_lost(summary.clamp_force, self.initial_clamp, self.procedure):
+                loosening = self.procedure.stop_at_loosening  # nothing pressed slides: never a shakedown
+                if self.loosening_at is None:
+                    self.loosening_at = self.equivalent
+            elif self.quiet_cycles >= self.procedure.stationary_window:
                 self.stationary = True
             elif phase == "wear" and loosening_evident(self.history, self.procedure):
                 loosening = self.procedure.stop_at_loosening
@@ -447,7 +455,8 @@ class _Run:
             figures["bolt_force_final_N"] = final_clamp
             figures["clamp_force_loss_fraction"] = (self.initial_clamp - final_clamp) / self.initial_clamp
         ending = (Ending.SHAKEDOWN if self.stationary else Ending.LOOSENING if stopped_early else Ending.COMPLETED)
-        said = verdict(self.history, self.procedure, self.stationary, loosened_before=self.loosening_at is not None)
+        said = verdict(self.history, self.procedure, self.stationary, loosened_before=self.loosening_at is not None,
+                       lost_clamp=clamp_lost(self.history[-1].clamp_force, self.initial_clamp, self.procedure))
         return RunResult(said, self.stationary, figures, self.state, self.equilibrium, self.history, ending)
 
 
@@ -481,7 +490,7 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
                 continue
             last = not any(n > 0 for _, n, _ in phases[phase_index + 1:])
             stopped_early = current.phase(phase_index, phase, n_cycles, effects, checkpoint, checkpoint_every, last)
-            if current.stationary:
+            if current.stationary or stopped_early:  # a lost clamp stops the COF phase too
                 break
     except RunStopped:
         raise

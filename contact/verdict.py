@@ -25,7 +25,8 @@ VERDICT_MEANINGS = {
                     "friction-driven surface damage; judge crack risk by FFDP",
     "damage": "points keep sliding after their COF rose there, at mu_max or still rising towards it when the run "
               "ended (or the whole contact slides): fretting scars expected, clamp force stable",
-    "loosening": "the clamp force keeps falling while the stick area shrinks: the joint loosens",
+    "loosening": "the clamp force keeps falling while the stick area shrinks, or half of it is lost: the joint "
+                 "loosens",
 }
 
 
@@ -135,8 +136,20 @@ def active_slip_area_fraction(area: np.ndarray, nominal_area: float, pressure: n
     return _fractions(area, nominal_area, sliding)
 
 
-def verdict(history: list, procedure, stationary: bool, loosened_before: bool = False) -> str:
-    """``loosening`` (see :func:`loosening_evident`; also when it was evident earlier in the run,
+def clamp_lost(clamp_force: float | None, initial_clamp: float | None, procedure) -> bool:
+    """Whether a bolted joint has lost ``procedure.clamp_loss_limit`` of its clamp force (N, the
+    bolts' summed force against ``initial_clamp``, that after the preload): it has loosened,
+    whatever the trend. A joint whose clamp is gone presses nothing, so nothing slides with any
+    pressure and the sliding measures read as stick."""
+    if clamp_force is None or initial_clamp is None or initial_clamp <= 0.0:
+        return False
+    return clamp_force <= (1.0 - procedure.clamp_loss_limit) * initial_clamp
+
+
+def verdict(history: list, procedure, stationary: bool, loosened_before: bool = False,
+            lost_clamp: bool = False) -> str:
+    """``loosening`` when the joint lost its clamp (``lost_clamp``, :func:`clamp_lost`), or when
+    loosening is evident (:func:`loosening_evident`; also when it was evident earlier in the run,
     ``loosened_before``, and the joint has not shaken down since: a run going on to its life
     horizon may see the loss rate slow over its last window without being any safer), else
     ``stick`` when at most ``area_tolerance`` of the area still slid in the last cycle (:func:`active_slip_area_fraction`; histories
@@ -144,7 +157,7 @@ def verdict(history: list, procedure, stationary: bool, loosened_before: bool = 
     zone holds and no COF evolved (the status "slip at μ_max" of a contact with μ_0 = μ_max
     says nothing about damage), else ``damage``. See :data:`VERDICT_MEANINGS`."""
     last = history[-1].figures
-    if (loosened_before and not stationary) or loosening_evident(history, procedure):
+    if lost_clamp or (loosened_before and not stationary) or loosening_evident(history, procedure):
         return "loosening"
     sliding = last.get("active_slip_area_fraction", last["slip_area_fraction"])
     if sliding <= procedure.area_tolerance:

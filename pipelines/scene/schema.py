@@ -158,6 +158,8 @@ SCHEMA = {
         "loosening_window_cycles": (NUMBER, False, _positive,
                                     "real cycles of falling clamp force (the window in engine running time)"),
         "stop_at_loosening": (bool, False, None, "end the run once loosening is evident (default true)"),
+        "clamp_loss_limit": (NUMBER, False, lambda v: None if 0 < v < 1 else "must lie in (0, 1)",
+                             "fraction of the clamp force whose loss is loosening at once (default 0.5)"),
         "max_cutbacks": (int, False, _integer_at_least(0), "halvings of a failing increment"),
         "record_every": (int, False, _integer_at_least(1), "store fields every n cycles"),
         "field_output": (NUMBER + (str, list), False, _field_output,
