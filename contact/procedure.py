@@ -445,6 +445,8 @@ class _Run:
         figures["cycles_run"] = self.cycle_number
         figures["equivalent_cycles"] = self.equivalent
         figures["nominal_contact_area"] = self.nominal_area
+        if np.isfinite(self.procedure.life_cycles):
+            figures["life_cycles"] = float(self.procedure.life_cycles)
         if self.stationary:
             figures["shakedown_at_cycles"] = self.stuck_since()
         if self.loosening_at is not None:

@@ -84,6 +84,19 @@ def _widened(*fractions) -> str:
             "widened the contact or the contact patch moved)")
 
 
+def _short_of_life(s: dict) -> str | None:
+    """A line when a run that neither shook down nor loosened ended short of its life_cycles
+    (its wear_cycles budget ran out first): its verdict covers that much running time only."""
+    life = s.get("life_cycles")
+    if life is None or s.get("shakedown_at_cycles") is not None or s["verdict"] == "loosening":
+        return None
+    if s["equivalent_cycles"] >= (1.0 - 1e-9) * life:
+        return None
+    return (f"  NOTE: the run ended at its wear_cycles budget after {s['equivalent_cycles']:.3g} real cycles, "
+            f"{s['equivalent_cycles'] / life:.1%} of its life_cycles ({life:.3g}): the verdict covers that running "
+            "time only (raise wear_cycles, or the jump, to reach the life)")
+
+
 def _human_summary(outcome) -> str:
     s = outcome.summary
     lines = [f"scene {s['scene']}: verdict {s['verdict'].upper()}"
@@ -112,6 +125,9 @@ def _human_summary(outcome) -> str:
         lines.append(f"  the run stands for {s['equivalent_cycles']:.3g} real load cycles, "
                      f"{s['equivalent_engine_hours']:.3g} engine hours at {s['engine_speed_rpm']:.0f} rpm"
                      + (f"; {', '.join(when)}" if when else ""))
+    short = _short_of_life(s)
+    if short:
+        lines.append(short)
     if s.get("min_stick_margin") is not None:
         lines.append(f"  smallest safety margin of stuck points: {s['min_stick_margin']:.3f}")
     if s.get("fdp_max_MPa_mm") is not None:
