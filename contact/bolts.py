@@ -124,3 +124,58 @@ class BoltSet:
                              for k, p in enumerate(self.patterns)])
         return self.pretension + self.stiffness * (self.elongation(space, equilibrium.control)
                                                    - self.locked_elongation)
+
+
+
+@dataclass(frozen=True)
+class RingOffset:
+    """Where a bolt end's coupled nodes (its ring) lie against its reference point, mm.
+
+    centre: (dim,) the middle of the nodes' extent along each coordinate: the centre of a ring or
+    patch symmetric about its bolt, however its mesh is graded (the mean of the nodes would lean
+    towards the finer side). distance: from the reference point to the centre; lever: its part
+    across the bolt's axis (the lever arm of the bolt's force about the ring's centre). radius:
+    root-mean-square distance of the nodes from the line through the centre along the axis;
+    extent: the largest distance of a node from the centre.
+    """
+
+    centre: np.ndarray
+    distance: float
+    lever: float
+    radius: float
+    extent: float
+
+
+def ring_offset(coordinates: np.ndarray, position: np.ndarray, axis: np.ndarray) -> RingOffset:
+    """The :class:`RingOffset` of nodes at ``coordinates`` (n, dim) mm coupled to a reference point
+    at ``position`` (dim,) mm, for a bolt along ``axis`` (dim,)."""
+    coordinates = np.asarray(coordinates, dtype=float)
+    axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    centre = 0.5 * (coordinates.min(axis=0) + coordinates.max(axis=0))
+
+    def across(vectors):
+        return vectors - np.outer(vectors @ axis, axis)
+
+    relative = coordinates - centre
+    offset = np.asarray(position, dtype=float) - centre
+    return RingOffset(centre, float(np.linalg.norm(offset)), float(np.linalg.norm(across(offset[None])[0])),
+                      float(np.sqrt(np.mean(np.sum(across(relative) ** 2, axis=1)))),
+                      float(np.max(np.linalg.norm(relative, axis=1))))
+
+def joint_tilt(axis: np.ndarray, facet_normals: np.ndarray, facet_areas: np.ndarray) -> float:
+    """Angle (degrees, 0…90) between a bolt's axis and the joint's normal: the area-weighted
+    mean of ``facet_normals`` (n, dim), unit, with ``facet_areas`` (n,) mm² (mm in 2D).
+    The axis's sense does not matter (head to nut may point either way through the joint)."""
+    mean = np.asarray(facet_areas, dtype=float) @ np.asarray(facet_normals, dtype=float)
+    axis = np.asarray(axis, dtype=float)
+    cosine = abs(float(mean @ axis)) / (np.linalg.norm(mean) * np.linalg.norm(axis))
+    return float(np.degrees(np.arccos(min(1.0, cosine))))
+
+
+def facets_near_axis(centroids: np.ndarray, point: np.ndarray, axis: np.ndarray, radius: float) -> np.ndarray:
+    """Boolean mask of facet ``centroids`` (n, dim) mm within ``radius`` mm of the line through
+    ``point`` along ``axis`` (a bolt's axis through its head)."""
+    axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    relative = np.asarray(centroids, dtype=float) - np.asarray(point, dtype=float)
+    across = relative - np.outer(relative @ axis, axis)
+    return np.linalg.norm(across, axis=1) <= radius

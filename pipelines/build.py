@@ -7,14 +7,15 @@ are read from the scene. Only what the scene's effects call for is created.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from contact.bolts import Bolt
+from contact.bolts import Bolt, facets_near_axis, joint_tilt, ring_offset
 from contact.assembly import Assembly, Body, ReferencePoint, assemble
-from contact.interface import surface_from_facets
+from contact.interface import Surface, surface_from_facets
 from contact.law import ContactLaw, ContactState
 from contact.procedure import LoadProgram, Procedure
 from contact.solver import NewtonSettings
@@ -22,7 +23,8 @@ from contact.sparse import decide_path, space_of
 from pipelines.coupling import Coupled, CouplingSettings, coupled_patterns, coupled_program, multibody_loading
 from reduction.mesh import generators as meshes
 from pipelines.scene import Scene
-from pipelines.scene.checks import mesh_unit_problem
+from pipelines.scene.checks import (BOLT_NEAR_RINGS, SceneWarning, bolt_tilt_finding, mesh_unit_problem,
+                                    ring_offset_finding)
 from pipelines.stages import StageCache
 from pipelines.support import check_support
 from reduction.body_loads import centrifugal, gravity
@@ -132,9 +134,65 @@ def _body(scene: Scene, name: str, spec: dict, mesh, sets) -> Body:
     for ref_name, ref in spec.get("reference_points", {}).items():
         nodes = select_body_nodes(nodes_of, mesh, ref["nodes"], f"bodies.{name}.reference_points.{ref_name}.nodes",
                                   sets)
+        for other, earlier in references.items():
+            _check_not_shared(name, spec["reference_points"], other, earlier.nodes, ref_name, nodes)
         references[ref_name] = ReferencePoint(nodes, np.asarray(ref["position"], float),
                                               bool(ref.get("rotations", False)))
     return Body(name, elastic, np.zeros(0, int), (), references, _body_loads(scene, name, elastic), tuple(supports))
+
+
+def _check_not_shared(body: str, tables: dict, first: str, first_nodes, second: str, second_nodes) -> None:
+    """Two reference points of ``body`` must couple different nodes (an RBE2 node follows one
+    reference point); the error names both keys and the node sets they name."""
+    shared = np.intersect1d(first_nodes, second_nodes).size
+    if not shared:
+        return
+    keys = [f"'bodies.{body}.reference_points.{point}.nodes'" for point in (first, second)]
+    sets = [tables[point]["nodes"].get("set") for point in (first, second)]
+    if sets[0] is not None and sets[0] == sets[1]:
+        said = f"{keys[0]} and {keys[1]} both name node set '{sets[0]}'"
+    else:
+        named = [key + (f" (node set '{name}')" if name else "") for key, name in zip(keys, sets)]
+        said = f"{named[0]} and {named[1]} select {shared} of the same nodes"
+    raise InputError(f"{said}: a node follows one reference point only; give each reference point its own nodes")
+
+
+def _check_bolt_geometry(scene: Scene, bodies: list[Body], slave: Surface) -> None:
+    """Each bolt against the mesh (:mod:`pipelines.scene.checks`: thresholds and why): its
+    axis against the joint's normal where it clamps, the area-weighted mean normal of the slave
+    surface's facets within :data:`BOLT_NEAR_RINGS` ring radii of its axis (the whole surface if
+    none lies so near), and each end's reference point against the centre of the nodes it
+    couples. Refusals raise one :class:`InputError`; warnings are :class:`SceneWarning`."""
+    by_name = {body.name: body for body in bodies}
+    centroids = slave.coordinates[slave.facets].mean(axis=1)
+    weights = slave.area[slave.facets].mean(axis=1)  # the facets' share of the tributary areas
+    problems, found = [], []
+    for name, spec in scene.data["bolts"].items():
+        axis = np.asarray(spec["axis"], float)
+        radii, positions = [], []
+        for end in ("head", "nut"):
+            body_name, point = spec[end].split(".")
+            reference = by_name[body_name].reference_points[point]
+            ring = ring_offset(by_name[body_name].elastic.coordinates[reference.nodes], reference.position, axis)
+            problem, warning = ring_offset_finding(f"bodies.{body_name}.reference_points.{point}",
+                                                   reference.position, ring)
+            problems += [problem] if problem else []
+            found += [warning] if warning else []
+            radii.append(ring.radius)
+            positions.append(reference.position)
+        reach = BOLT_NEAR_RINGS * max(radii)
+        near = facets_near_axis(centroids, positions[0], axis, reach)
+        where = (f"mean over the {near.sum()} contact facets within {reach:.3g} mm of its axis" if near.any() else
+                 f"mean over the whole contact surface, none of whose facets lies within {reach:.3g} mm of its axis")
+        near = near if near.any() else np.ones_like(near)
+        problem, warning = bolt_tilt_finding(name, joint_tilt(axis, slave.facet_normals[near], weights[near]),
+                                             where, float(scene.data["contact"]["cof_initial"]))
+        problems += [problem] if problem else []
+        found += [warning] if warning else []
+    if problems:
+        raise InputError("; ".join(problems))
+    for message in found:
+        warnings.warn(message, SceneWarning, stacklevel=3)
 
 
 def _control_patterns(scene: Scene, kind: str) -> dict:
@@ -175,6 +233,14 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
         bodies.append(_body(scene, name, spec, mesh, named_sets[name]))
     motions = _control_patterns(scene, "motions")
     check_support(scene, bodies, motions)  # before the multibody stage and the condensation
+    contact = data["contact"]
+    slave, master = ((contact[role]["body"], select_facets(built_meshes[contact[role]["body"]], contact[role],
+                                                           f"contact.{role}", named_sets[contact[role]["body"]]))
+                     for role in ("slave", "master"))
+    slave_body = next(body for body in bodies if body.name == slave[0])
+    slave_surface = surface_from_facets(slave_body.elastic.mesh, slave[1], "contact.slave")
+    if "bolts" in scene.effects:
+        _check_bolt_geometry(scene, bodies, slave_surface)
     coupled_body = data.get("coupling", {}).get("body")
     loading = (multibody or multibody_loading(scene, cache)) if coupled_body else None
     pattern_names, condensers = (), {}
@@ -185,15 +251,10 @@ def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCach
             if condenser is not None:
                 condensers[body.name] = condenser
             pattern_names = tuple(inertia)
-    contact = data["contact"]
-    slave, master = ((contact[role]["body"], select_facets(built_meshes[contact[role]["body"]], contact[role],
-                                                           f"contact.{role}", named_sets[contact[role]["body"]]))
-                     for role in ("slave", "master"))
     bolts = tuple(Bolt(name, spec["head"], spec["nut"], np.asarray(spec["axis"], float),
                        float(spec["stiffness"]), float(spec["pretension"]))
                   for name, spec in data.get("bolts", {}).items()) if "bolts" in scene.effects else ()
-    slave_body = next(body for body in bodies if body.name == slave[0])
-    n_points = surface_from_facets(slave_body.elastic.mesh, slave[1], "contact.slave").nodes.size
+    n_points = slave_surface.nodes.size
     path, reason = decide_path(contact.get("solver", "auto"), n_points, scene.dimension)
     assembly = assemble(bodies, slave, master, loads=_control_patterns(scene, "loads"),
                         motions=motions,

@@ -4,7 +4,10 @@ reference points, bolts, patterns), node selections and effects.
 Each check appends its problems, sentences naming their key, to a list; :func:`pipelines.scene.schema.validate`
 runs a check only when the schema found the tables it reads (:data:`SEMANTIC_CHECKS`) sound in structure.
 :func:`plausibility` warns of magnitudes that are likely unit mistakes; :func:`mesh_unit_problem`
-compares a mesh file's size, once it is read, with the scene's lengths for its body (a mesh in metres).
+compares a mesh file's size, once it is read, with the scene's lengths for its body (a mesh in metres);
+:func:`bolt_tilt_finding` and :func:`ring_offset_finding` judge a bolt against the built mesh (its axis
+against the joint's normal, its ends' reference points against the nodes they couple), refusing or
+warning (:class:`SceneWarning`).
 Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
 """
 
@@ -283,6 +286,83 @@ def _bolt_axis_problems(name, bolt, axis, head, nut, dim) -> list[str]:
             f"('{bolt['head']}' at {head}, '{bolt['nut']}' at {nut} mm) give the direction {direction}; "
             "the axis must point from the head to the nut"]
 
+
+
+class SceneWarning(UserWarning):
+    """A scene that builds and runs but most likely does not model what was meant (a bolt that
+    shears its joint, a reference point away from the nodes it couples). Issued with
+    :func:`warnings.warn` while the model is built; the command line says it as
+    ``fretwork: warning: ...``."""
+
+
+#: A bolt whose axis is tilted by θ from the joint's normal pulls the clamped parts sideways,
+#: against each other, with sin θ of its force, and clamps them with only cos θ of it: friction
+#: must carry that shear before any load does (it slips once tan θ exceeds μ). Above
+#: BOLT_TILT_WARN_DEG the shear is over 5 % of the pretension, a quarter of the friction at
+#: μ = 0.2, and the joint reads weaker than its bolt makes it; a drawing or mesh tolerance stays
+#: well below. Beyond BOLT_TILT_REFUSED_DEG the axis lies nearer the joint's plane than its
+#: normal: the shear exceeds the clamp force, which no friction coefficient of a metal joint
+#: (μ < 1) carries, so the bolt clamps nothing.
+BOLT_TILT_WARN_DEG = 3.0
+BOLT_TILT_REFUSED_DEG = 45.0
+#: The joint's normal at a bolt is the mean over the contact facets within this many ring radii
+#: (:func:`contact.bolts.ring_offset`) of its axis: a few bolt diameters, where it clamps.
+BOLT_NEAR_RINGS = 3.0
+
+
+def bolt_tilt_finding(name: str, tilt: float, where: str, cof: float) -> tuple[str | None, str | None]:
+    """(problem, warning) of bolt ``name`` whose axis lies ``tilt`` degrees off the joint's
+    normal (``where``: over which facets it was taken); ``cof``: the initial μ."""
+    said = (f"'bolts.{name}.axis' is {tilt:.3g}° off the joint's normal ({where}), "
+            f"{90.0 - tilt:.3g}° from its plane")
+    if tilt > BOLT_TILT_REFUSED_DEG:
+        return (said + ": a bolt that far from the normal clamps nothing (it pulls the parts along the "
+                "joint more than across it); give the axis across the joint, from head to nut"), None
+    if tilt > BOLT_TILT_WARN_DEG:
+        shear, ratio = math.sin(math.radians(tilt)), math.tan(math.radians(tilt))
+        against = (f"above 'contact.cof_initial' = {cof:g}: friction alone cannot hold it" if ratio > cof else
+                   f"{ratio / cof:.0%} of 'contact.cof_initial' = {cof:g}")
+        return None, (said + f": it pulls the joint sideways with sin θ = {shear:.1%} of its pretension, which "
+                      f"friction must carry before any load (tan θ = {ratio:.3g}, {against}); if the bolt is meant "
+                      "square to the joint, correct its axis and its reference points' positions")
+    return None, None
+
+
+#: A bolt end's reference point off the centre of the ring it couples (RBE2 with rotations)
+#: puts the bolt's force on the ring with a lever arm d across the axis: for nodes at radius r
+#: around the centre the moment F·d changes the bearing pressure by about ±2·d/r, ±50 % at
+#: RING_OFFSET_WARN = 1/4 of the ring's radius, so the head bears on one side (a reference point
+#: meant at the ring's centre, misplaced or on a node set of another bolt). A position farther
+#: from the centre than RING_OFFSET_REFUSED times the ring's largest extent (its farthest node)
+#: lies beyond any part of a ring (a half or quarter ring on symmetry planes stays within it):
+#: the position or the node set belongs to another bolt end. Below RING_OFFSET_FLOOR (mm), the
+#: rounding of a position written to two decimals, nothing is said, and below RING_REFUSED_FLOOR
+#: (mm) nothing refused (a ring of a node or two has no extent to measure against).
+RING_OFFSET_WARN = 0.25
+RING_OFFSET_REFUSED = 2.0
+RING_OFFSET_FLOOR = 0.01
+RING_REFUSED_FLOOR = 1.0
+
+
+def ring_offset_finding(key: str, position, ring) -> tuple[str | None, str | None]:
+    """(problem, warning) of the reference point ``key`` ('bodies.B.reference_points.P') of a bolt
+    end at ``position`` (mm) against the ring of nodes it couples, a
+    :class:`contact.bolts.RingOffset`."""
+    def at(point):
+        return [round(float(c), 3) + 0.0 for c in point]
+
+    said = (f"'{key}.position' {at(position)} is {ring.distance:.3g} mm from the centre {at(ring.centre)} "
+            f"of the nodes it couples ('{key}.nodes', a ring of radius {ring.radius:.3g} mm")
+    if ring.distance > max(RING_OFFSET_REFUSED * ring.extent, RING_REFUSED_FLOOR):
+        return (said + f", all within {ring.extent:.3g} mm of its centre): the position or the node set "
+                "belongs to another bolt end; give the centre of the ring as the position, or the ring's own "
+                "node set"), None
+    if ring.lever > max(RING_OFFSET_WARN * ring.radius, RING_OFFSET_FLOOR):
+        pressure = f"about ±{2 * ring.lever / ring.radius:.0%}" if ring.radius > 0 else "all of it"
+        return None, (said + f"), {ring.lever:.3g} mm across the bolt's axis: the bolt pulls the ring off its "
+                      f"centre and, with rotations coupled, tilts it (bearing pressure {pressure} round the "
+                      "ring); give the centre of the ring as the position, or couple nodes centred on it")
+    return None, None
 
 def held_groups(data) -> list[list[str]]:
     """The bodies in groups joined by the contact or a bolt, each group a list of names."""

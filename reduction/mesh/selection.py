@@ -115,9 +115,14 @@ def select_points(coordinates: np.ndarray, selection: dict, where: str, sets=Non
         if sets is None:
             raise InputError(f"'{where}.set' names a node set, but the body's mesh is generated, "
                              "not read from a file with named sets")
+        name = selection["set"]
+        if name not in sets.node_sets:
+            raise InputError(f"'{where}.set': no node set '{name}' in the mesh file ({sets.source})"
+                             f"{_named_like(name, sets.node_sets)}; its node sets: "
+                             f"{', '.join(sorted(sets.node_sets)) or 'none'}")
         # the set's nodes are numbered as the body's (vertices first); a vertex-only
         # ``coordinates`` (the corner mesh of Hex20) takes the set's vertices
-        nodes = sets.node_set(selection["set"])
+        nodes = sets.node_set(name)
         mask = np.zeros(len(coordinates), dtype=bool)
         mask[nodes[nodes < len(coordinates)]] = True
         return mask
@@ -134,6 +139,13 @@ def select_points(coordinates: np.ndarray, selection: dict, where: str, sets=Non
     axis = AXES[selection["axis"]]
     tolerance = selection.get("tolerance", 1e-6 * span)
     return np.abs(coordinates[:, axis] - selection["value"]) <= tolerance
+
+
+def _named_like(name: str, names) -> str:
+    """': did you mean 'X'?' for a set name that differs from one of ``names`` only in case
+    (sets are named case-sensitively here, though Abaqus ignores case), else ''."""
+    alike = [other for other in names if other.lower() == name.lower()]
+    return f": did you mean '{alike[0]}'? (set names are case-sensitive)" if alike else ""
 
 
 def select_body_nodes(coordinates: np.ndarray, mesh, selection: dict, where: str, sets=None) -> np.ndarray:
