@@ -17,7 +17,8 @@ import re
 import signal
 import sys
 import threading
-from contextlib import nullcontext
+import warnings
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -752,6 +753,25 @@ def _forget_interrupt() -> None:
     ctypes.pythonapi.PyRun_SimpleStringFlags(b"", None)
 
 
+@contextmanager
+def _scene_warnings_said():
+    """A :class:`pipelines.scene.checks.SceneWarning` raised while a command runs (a scene that
+    builds but most likely does not model what was meant) is said at once, before the run it
+    precedes, as ``fretwork: warning: ...``; other warnings are shown as Python shows them."""
+    from pipelines.scene.checks import SceneWarning
+
+    with warnings.catch_warnings():  # restores showwarning on the way out
+        shown = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None):
+            if issubclass(category, SceneWarning):
+                _warn(str(message))
+            else:
+                shown(message, category, filename, lineno, file, line)
+        warnings.showwarning = show
+        yield
+
+
 def _main(argv, resumable: list) -> int:
     """The command; ``resumable`` receives the checkpoint an interrupted run continues from."""
     parser = build_parser()
@@ -770,7 +790,7 @@ def _main(argv, resumable: list) -> int:
     tqdm.set_lock(threading.RLock())
 
     try:
-        with _output(args):
+        with _output(args), _scene_warnings_said():
             return handler(args)
     except InputError as error:
         print(f"fretwork: error: {error}", file=sys.stderr)
