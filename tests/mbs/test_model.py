@@ -95,7 +95,7 @@ def test_real_time_factor_of_the_default_model():
 
 
 def test_unknown_effect_is_rejected():
-    with pytest.raises(InputError, match="unknown effects"):
+    with pytest.raises(InputError, match="may name only .*gas_torque.*, not earthquake"):
         ModelParams(effects=frozenset({"gas_torque", "earthquake"})).validate()
 
 
