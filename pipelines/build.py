@@ -59,6 +59,22 @@ class Model:
         """The contact space of the model's structure on its contact path (dense or sparse)."""
         return space_of(self.assembly.structure)
 
+    def solver(self, space=None):
+        """The contact solver the scene's ``contact.sliding`` asks for, on ``space`` (default: a
+        new :meth:`contact_space`): small sliding a :class:`contact.solver.ContactSolver`, else
+        (default auto: the pairing follows the bodies once they slide by an element) a
+        :class:`contact.sliding.SlidingSolver`. Every job and study runs the scene with it."""
+        from contact.sliding import SlidingSolver
+        from contact.solver import ContactSolver
+
+        space = self.contact_space() if space is None else space
+        contact = self.scene.data["contact"]
+        sliding = contact.get("sliding", "auto")
+        if sliding == "small":
+            return ContactSolver(space, self.law, self.settings)
+        method = "node_to_segment" if contact.get("pairing") == "node_to_segment" else "mortar"
+        return SlidingSolver(self.assembly, self.law, self.settings, mode=sliding, method=method, space=space)
+
     def initial_state(self) -> ContactState:
         n_tangent = self.scene.dimension - 1
         wear_bodies = 2 if "wear" in self.scene.effects else None

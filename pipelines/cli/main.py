@@ -27,8 +27,20 @@ from pipelines import interrupts
 from reduction.errors import InputError, listed
 
 
+def _finite(value):
+    """``value`` with every non-finite float (inf, NaN) as None: JSON has no Infinity or NaN,
+    and a strict reader refuses them."""
+    if isinstance(value, dict):
+        return {key: _finite(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(item) for item in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    return value
+
+
 def _json(value) -> str:
-    return json.dumps(value, indent=2, default=float)
+    return json.dumps(_finite(value), indent=2, default=float, allow_nan=False)
 
 
 def _cache(args):
@@ -364,9 +376,9 @@ def cmd_convergence(args) -> int:
             print(f"{level['size_mm']:>8g} mm: loosening evident after {evident:.4g} real cycles"
                   + (" (the run stopped there)" if study["stop_at_loosening"] else ""))
     converged = study["converged_size_mm"]
-    print("converged at " + (f"{converged:g} mm (its verdict equals the next finer level's)" if converged else
+    print("converged at " + (f"{converged:g} mm (its verdict equals every finer level's)" if converged else
                              "no size: the verdict changes down to the finest level run"))
-    for name, found in ((n, f) for n, f in study["extrapolated"].items() if math.isfinite(f["order"])):
+    for name, found in ((n, f) for n, f in study["extrapolated"].items() if f["order"] is not None):
         print(f"  {name}: Richardson estimate {found['estimate']:.4g} (observed order {found['order']:.2f})")
     print(f"  plot: {study['plot']}" + (f", over the run: {study['history_plot']}" if study["history_plot"] else ""))
     return 0

@@ -12,8 +12,7 @@ from tqdm import tqdm
 from contact import procedure
 from contact.procedure import RunStopped
 from contact.sliding import SlidingSolver
-from contact.solver import ContactSolver, ConvergenceError
-from contact.structure import ContactSpace
+from contact.solver import ConvergenceError
 from contact.verdict import Ending
 from pipelines.build import Model, build
 from pipelines.output.damage import DamageObserver
@@ -103,17 +102,6 @@ class Outcome:
     stage_times: dict = field(default_factory=dict)
 
 
-def _solver(model: Model, space: ContactSpace):
-    """The contact solver the scene's ``contact.sliding`` asks for (default auto: the pairing
-    follows the bodies once they slide by an element; see :mod:`contact.sliding`)."""
-    contact = model.scene.data["contact"]
-    sliding = contact.get("sliding", "auto")
-    if sliding == "small":
-        return ContactSolver(space, model.law, model.settings)
-    method = "node_to_segment" if contact.get("pairing") == "node_to_segment" else "mortar"
-    return SlidingSolver(model.assembly, model.law, model.settings, mode=sliding, method=method, space=space)
-
-
 def contact_solver(model: Model) -> str:
     """Which contact path ran and why, e.g. "sparse (2,704 points ≥ 2,500)"."""
     return f"{model.contact_path} ({model.contact_path_reason})"
@@ -136,7 +124,7 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     _say(progress, model.scene.name, f"the contact operators ({contact_solver(model)} path)")
     clock = time.perf_counter()
     space = model.contact_space()
-    solver = _solver(model, space)
+    solver = model.solver(space)
     stage_times["contact_space_s"] = time.perf_counter() - clock
     effects = model.scene.effects
     proc = model.procedure

@@ -50,7 +50,7 @@ from pathlib import Path
 from typing import Callable
 
 from contact import procedure
-from contact.solver import ContactSolver, ConvergenceError
+from contact.solver import ConvergenceError
 from pipelines import scene as scenes
 from pipelines.build import build
 from pipelines.studies.knobs import (CONTACT_KNOBS, Run, SCALAR_QUANTITIES, Study, _apply_sweeps,
@@ -74,7 +74,7 @@ def run_setting(scene_path: Path, overrides: dict, label: str, settings: dict, v
     try:
         with threadpool_limits(limits=1, user_api="blas") if threadpool_limits else nullcontext():
             model = build(scene)
-            solver = ContactSolver(model.contact_space(), model.law, model.settings)
+            solver = model.solver()  # as `fretwork run` runs the scene (finite sliding where it asks)
             result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
                                    cof_evolution="cof_evolution" in scene.effects, wear="wear" in scene.effects)
     except ConvergenceError as error:

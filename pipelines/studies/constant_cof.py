@@ -48,7 +48,6 @@ import h5py
 import numpy as np
 
 from contact import procedure
-from contact.solver import ContactSolver
 from pipelines import scene as scenes
 from pipelines.build import build
 from pipelines.coupling import multibody_loading
@@ -161,8 +160,7 @@ class Comparison:
 
 def _last_cycle(key: str, name: str, scene, model) -> ModelCycle:
     """The last COF cycle of ``model`` run from its preload, wear off."""
-    space = model.contact_space()
-    solver = ContactSolver(space, model.law, model.settings)
+    solver = model.solver()  # as `fretwork run` runs the scene (finite sliding where it asks)
     evolving = "cof_evolution" in scene.effects
     result = procedure.run(solver, model.initial_state(), model.program, model.procedure,
                            cof_evolution=evolving, wear=False)

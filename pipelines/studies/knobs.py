@@ -141,13 +141,20 @@ def knobs_for(scene: scenes.Scene, quick: bool) -> tuple[list[Knob], dict]:
                       (gamma,) + tuple(gamma * 10 ** k for k in range(1, count)) if quick else
                       (gamma / 10, gamma, gamma * 10), False))
     wear_cycles = proc.get("wear_cycles", defaults.wear_cycles)
-    if "wear" in scene.effects and wear_cycles > 0:
-        jump = proc.get("cycle_jump", defaults.cycle_jump)
+    jump = proc.get("cycle_jump", defaults.cycle_jump)
+    if "wear" not in scene.effects or wear_cycles <= 0:
+        not_applicable["cycle_jump"] = "the scene has no wear phase"
+    elif jump == "auto":
+        # the adaptive jump's own knob: the largest pressure change a block may cause (finer smaller)
+        theta = proc.get("jump_tolerance", defaults.jump_tolerance)
+        knobs.append(Knob("jump_tolerance", "adaptive cycle jump: largest pressure change per block / mean "
+                          "pressure", tuple(dict.fromkeys(min(0.5, theta * 2 ** k) for k in range(-1, count - 1)))
+                          if not quick else (theta, min(0.5, 2 * theta)), False))
+        not_applicable["cycle_jump"] = "the scene's jump is adaptive (\"auto\"): its jump_tolerance is swept"
+    else:
         equivalent = wear_cycles * jump
         knobs.append(Knob("cycle_jump", f"cycle-jump factor J (wear_cycles × J = {equivalent:g} kept)",
                           tuple(equivalent / n for n in _halvings(wear_cycles, count, 1)), False))
-    else:
-        not_applicable["cycle_jump"] = "the scene has no wear phase"
     cof_cycles = proc.get("cof_cycles", defaults.cof_cycles)
     if "cof_evolution" in scene.effects and cof_cycles > 0:
         knobs.append(Knob("cof_cycles", "COF-phase length, cycles", _halvings(cof_cycles, count, 1), True))
@@ -196,6 +203,8 @@ def setting_overrides(scene: scenes.Scene, settings: dict) -> dict:
                 out.update(run_up_within(scene, int(value)))
         elif name in ("normal_stiffness", "critical_slip"):
             out[f"contact.{name}"] = float(value)
+        elif name == "jump_tolerance":
+            out["procedure.jump_tolerance"] = float(value)
         elif name == "cycle_jump":
             proc = scene.data.get("procedure", {})
             equivalent = proc.get("wear_cycles", 0) * proc.get("cycle_jump", 1.0)
@@ -376,7 +385,7 @@ def _sweep(knobs: list[Knob], runner: Callable, arguments: Callable, overrides_o
 
 
 CONTACT_KNOBS = ("contact_size", "increments_per_cycle", "normal_stiffness", "critical_slip", "cycle_jump",
-                 "cof_cycles")
+                 "jump_tolerance", "cof_cycles")
 
 
 def _is_multibody(path: Path) -> bool:

@@ -54,6 +54,44 @@ def test_cycle_jump_keeps_the_equivalent_cycles(coarse_cylinder):
     assert {"craig_bampton_modes", "mbs_time_step", "cof_cycles"} <= set(not_applicable)
 
 
+def test_an_adaptive_jump_is_studied_by_its_tolerance(coarse_cylinder):
+    """A scene with cycle_jump = "auto" has no J to sweep (QA: the study multiplied the wear
+    cycles by the string "auto" and stopped with an internal error on every counterweight
+    scene): its knob is the jump tolerance θ, finest (smallest) first."""
+    scene = scenes.load(coarse_cylinder, {"procedure.cycle_jump": "auto", "procedure.jump_tolerance": 0.04})
+    knobs, not_applicable = knobs_for(scene, quick=False)
+    assert "cycle_jump" not in [k.name for k in knobs] and "adaptive" in not_applicable["cycle_jump"]
+    tolerance = next(k for k in knobs if k.name == "jump_tolerance")
+    assert tolerance.values == (0.02, 0.04, 0.08) and not tolerance.finer_is_larger
+    assert next(k for k in knobs_for(scene, quick=True)[0] if k.name == "jump_tolerance").values == (0.04, 0.08)
+    overrides = setting_overrides(scene, {"jump_tolerance": 0.08})
+    assert overrides == {"procedure.jump_tolerance": 0.08}
+    scenes.load(coarse_cylinder, {"procedure.cycle_jump": "auto", **overrides})  # a valid scene
+
+
+def test_the_study_runs_the_scene_as_fretwork_run_does(coarse_cylinder, tmp_path):
+    """Finite sliding where the scene asks for it (QA: the study always ran small sliding, so its
+    reference differed from `fretwork run`'s by 0.24 % in max wear on the cylinder)."""
+    from contact.sliding import SlidingSolver
+    from contact.solver import ContactSolver
+    from pipelines.build import build
+
+    from pipelines.jobs.run import run_scene
+    from pipelines.studies.accuracy import run_setting
+
+    assert isinstance(build(scenes.load(coarse_cylinder)).solver(), SlidingSolver)  # sliding "auto"
+    small = build(scenes.load(coarse_cylinder, {"contact.sliding": "small"})).solver()
+    assert isinstance(small, ContactSolver)
+    # on the shipped 0.05 mm elements the 75 µm slip re-pairs (14 times in 2 cycles of 12 increments)
+    fine = {"bodies.cylinder.mesh.contact_size": 0.05, "bodies.plane.mesh.contact_size": 0.05}
+    studied = run_setting(coarse_cylinder, fine, "as shipped", {}, ())
+    run = run_scene(scenes.load(coarse_cylinder, fine), tmp_path / "run", progress=False, plots=False)
+    assert run.summary["repairings"] > 0
+    assert studied.values["max_wear_depth_mm"] == run.summary["max_wear_depth_mm"]  # the same bits
+    fixed = run_setting(coarse_cylinder, {**fine, "contact.sliding": "small"}, "small", {}, ())
+    assert fixed.values["max_wear_depth_mm"] != run.summary["max_wear_depth_mm"]  # 0.24 % apart
+
+
 def test_a_shortened_cof_phase_keeps_the_vibration_run_up_inside_it():
     """The counterweight's vibration runs up over most of its COF phase; the study's caps (40,
     or 10 with --quick) and the cof_cycles knob keep that share, and the scenes they make are

@@ -1,5 +1,6 @@
 """The convergence study's arithmetic: Richardson extrapolation, the converged size, overrides."""
 
+import numpy as np
 import pytest
 
 from pipelines.studies.convergence import (
@@ -42,6 +43,18 @@ def test_richardson_declines_sequences_that_do_not_allow_it(sizes, values):
 
 def test_an_exact_figure_extrapolates_to_itself():
     assert richardson([4.0, 2.0, 1.0], [0.5, 0.5, 0.5])["estimate"] == 0.5
+    # no order where the two finest agree exactly (it was inf, written as Infinity: not JSON)
+    assert richardson([4.0, 2.0, 1.0], [0.9, 0.5, 0.5]) == {"estimate": 0.5, "order": None, "error_finest": 0.0}
+
+
+def test_the_json_of_a_study_is_strict_json():
+    import json
+
+    from pipelines.cli.main import _json
+
+    text = _json({"order": float("inf"), "values": [1.0, float("nan")], "nested": {"x": np.float64("-inf")}})
+    assert json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in JSON")) == {
+        "order": None, "values": [1.0, None], "nested": {"x": None}}
 
 
 def _level(size, verdict, limit=None):
@@ -56,6 +69,8 @@ def test_converged_size_is_the_coarsest_level_agreeing_with_the_next_and_the_fin
     assert converged_size(levels, limit_tolerance=0.01) is None  # the finest has no finer level to agree with
     assert converged_size([_level(10.0, "stick"), _level(5.0, "damage")]) is None
     assert converged_size([_level(10.0, "stick"), _level(5.0, "stick")]) == 10.0  # no limits searched
+    # agreeing with the next finer level is not enough when the finest says otherwise (QA)
+    assert converged_size([_level(4.0, "stick"), _level(2.0, "stick"), _level(1.0, "loosening")]) is None
 
 
 def test_size_overrides_set_every_generated_mesh():
