@@ -61,3 +61,19 @@ def test_ranges_that_do_not_bracket_a_change(pieces, limit, stuck_below):
 def test_a_grid_of_one_is_refused():
     with pytest.raises(ValueError):
         scan(lambda a: {}, 0.1, 0.4, tolerance_mm=0.01, grid=1)
+
+
+def test_the_amplitudes_run_are_the_decimals_they_stand_for():
+    """A grid of 20-300 µm and its bisections run 160 and 238.75 µm, not 159.99999999999997
+    and 238.75000000000003 (QA: the limit was shown as 238.7 µm, and its run differed from a
+    run of the scene stated at 238.75 µm in the last digits)."""
+    asked = []
+
+    def evaluate(amplitudes):
+        asked.extend(amplitudes)
+        return {a: ("stick" if a < 0.2375 else "damage") for a in amplitudes}
+
+    result = scan(evaluate, 0.02, 0.3, tolerance_mm=0.005, grid=5)
+    assert asked[:5] == [0.02, 0.09, 0.16, 0.23, 0.3]
+    assert all(a == float(repr(round(a, 9))) and len(repr(a)) <= 11 for a in asked)
+    assert result.limit_mm == 0.23875 and result.stuck_below_mm == 0.234375
