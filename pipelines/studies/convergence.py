@@ -259,13 +259,15 @@ def plot_convergence(study: dict, path: Path) -> Path:
     areas = axes[0, 0]
     common = study.get("common_cycles")
     for name, label, scale in shown:
-        values = [scale * ((level["extra"]["at_common_cycles"] if common else level["figures"]).get(name) or 0.0)
-                  for level in levels]
-        areas.plot(sizes, values, marker="o", label=label)
+        values = [(level["extra"]["at_common_cycles"] if common else level["figures"]).get(name) for level in levels]
+        if all(value is None for value in values):
+            continue  # a figure no level has (the clamp force of a joint without bolts): no line at 0
+        areas.plot(sizes, [np.nan if value is None else scale * value for value in values], marker="o", label=label)
     for level in levels:
         areas.annotate(level["verdict"], (level["size_mm"], 0), textcoords="offset points", xytext=(0, 4),
                        ha="center", fontsize=8)
-    areas.set_ylabel("% of nominal area\nor of clamp force")
+    clamped = any(line.get_label() == "clamp-force loss" for line in areas.get_lines())
+    areas.set_ylabel("% of nominal area" + ("\nor of clamp force" if clamped else ""))
     if common:
         areas.set_title(f"figures at {common:.3g} real cycles, the shortest run that did not shake down "
                         "(verdicts: whole runs)", fontsize=8)
@@ -334,20 +336,31 @@ def plot_histories(study: dict, path: Path) -> Path | None:
         histories.append((level, real, clamp, stick))
     if not histories:
         return None
-    figure, (force, area) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    bolted = any(np.isfinite(clamp).any() for _, _, clamp, _ in histories)  # else no clamp-force panel
+    if bolted:
+        figure, (force, area) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    else:
+        figure, area = plt.subplots(1, 1, figsize=(7, 3.6))
     for level, real, clamp, stick in histories:
         label = f"{level['size_mm']:g} mm ({level['points']:,} points): {level['verdict']}"
+        if not bolted:
+            area.plot(real, 100.0 * stick, label=label)
+            continue
         line, = force.plot(real, 1e-3 * clamp, label=label)
         area.plot(real, 100.0 * stick, color=line.get_color())
         evident = level["figures"].get("loosening_evident_at_cycles")
         if evident is not None:
             row = min(int(np.searchsorted(real, evident * (1.0 - 1e-12))), real.size - 1)
             force.plot(real[row], 1e-3 * clamp[row], marker="v", color=line.get_color(), markersize=8)
+    area.set_ylabel("stick area (% of nominal)")
+    area.set_xlabel("real load cycles")
+    area.set_xscale("log")
+    title = f"mesh convergence over the run: {Path(study['scene']).stem}"
+    if not bolted:
+        area.legend(fontsize=8)
+        return _save(figure, (area,), title, path)
     if any(level["figures"].get("loosening_evident_at_cycles") is not None for level, *_ in histories):
         force.plot([], [], marker="v", linestyle="none", color="0.3", label="loosening evident")
     force.set_ylabel("clamp force (kN)")
     force.legend(fontsize=8)
-    area.set_ylabel("stick area (% of nominal)")
-    area.set_xlabel("real load cycles")
-    area.set_xscale("log")
-    return _save(figure, (force, area), f"mesh convergence over the run: {Path(study['scene']).stem}", path)
+    return _save(figure, (force, area), title, path)

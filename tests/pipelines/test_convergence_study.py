@@ -239,3 +239,32 @@ def test_a_scene_of_mesh_files_is_refused_with_the_way_out(tmp_path, capsys):
     assert main(["study", "convergence", str(scene), "--sizes", "10,5", "--workers", "0",
                  "--out", str(tmp_path / "out")]) == 2
     assert "generated meshes" in capsys.readouterr().err
+
+
+def test_a_joint_without_bolts_gets_no_clamp_force_line_or_panel(tmp_path, monkeypatch):
+    """QA: a scene without bolts had its missing clamp-force loss drawn as 0 % and an empty
+    clamp-force panel over the run."""
+    import h5py
+    import matplotlib.pyplot as plt
+
+    from pipelines.studies.convergence import plot_convergence, plot_histories
+
+    results = tmp_path / "results.h5"
+    with h5py.File(results, "w") as file:
+        file["cycles/equivalent_cycles"] = [1000.0, 2000.0]
+        file["cycles/figures/clamp_force_N"] = [np.nan, np.nan]
+        file["cycles/figures/stick_area_fraction"] = [0.4, 0.3]
+    figures = {"stick_area_fraction": 0.3, "active_slip_area_fraction": 0.7, "worn_area_fraction": 1.0,
+               "clamp_force_loss_fraction": None}
+    study = {"scene": "cyl.toml", "levels": [
+        {"size_mm": size, "points": 10, "verdict": "damage", "limit_mm": None, "figures": figures,
+         "extra": {"results": str(results)}} for size in (0.2, 0.1)]}
+    kept = []
+    monkeypatch.setattr(plt, "close", kept.append)
+    plot_convergence(study, tmp_path / "convergence.png")
+    plot_histories(study, tmp_path / "convergence_cycles.png")
+    sizes, over_run = kept
+    labels = [line.get_label() for line in sizes.axes[0].get_lines()]
+    assert "clamp-force loss" not in labels and "stick area" in labels
+    assert sizes.axes[0].get_ylabel() == "% of nominal area"
+    assert [ax.get_ylabel() for ax in over_run.axes] == ["stick area (% of nominal)"]
