@@ -308,4 +308,11 @@ def coupled_program(model, wing_amplitude: float | None = None):
         tables = {name: values - values.mean() if name.startswith("frame_") else values
                   for name, values in tables.items()}
     program = TabulatedProgram(model.program.patterns, model.program.shapes, model.program.held, tables)
-    return replace(model, program=program, coupling=Coupled(settings, coupled.loading, cycle, coupled.patterns))
+    # the scene as run states the amplitude run (results.h5's scene_toml; a limit search's runs
+    # had the scene's own amplitude there)
+    coupling_table = {key: value for key, value in model.scene.data["coupling"].items() if key != "wing_amplitude"}
+    if wing_amplitude is not None:
+        coupling_table["wing_amplitude"] = float(wing_amplitude)
+    scene = replace(model.scene, data={**model.scene.data, "coupling": coupling_table})
+    return replace(model, scene=scene, program=program,
+                   coupling=Coupled(settings, coupled.loading, cycle, coupled.patterns))

@@ -315,3 +315,16 @@ def test_a_repeated_amplitude_run_is_read_from_the_cache(tmp_path):
 def test_limit_of_an_uncoupled_scene_is_bad_input(capsys):
     assert main(["limit", str(EXAMPLES / "cylinder_on_plane.toml"), "--amplitude", "100:200"]) == 2
     assert "needs a coupled scene" in capsys.readouterr().err
+
+
+def test_a_model_rebuilt_for_another_amplitude_states_it_in_its_scene(cache):
+    """The scene a run records (results.h5's scene_toml) is the one run: a limit search's runs
+    stated the scene's own 100 µm whatever amplitude they ran (QA)."""
+    from pipelines.coupling import coupled_program
+
+    model = build(scenes.load(SCENE, COARSE), cache=cache)
+    rebuilt = coupled_program(model, 0.23875)
+    assert rebuilt.scene.data["coupling"]["wing_amplitude"] == 0.23875
+    assert 'wing_amplitude = 0.23875' in scenes.resolved_text(rebuilt.scene)
+    assert model.scene.data["coupling"]["wing_amplitude"] == 0.1  # the built model is not changed
+    assert "wing_amplitude" not in coupled_program(model, None).scene.data["coupling"]  # the multibody one
