@@ -11,7 +11,7 @@ from pipelines.output import plots
 
 @pytest.mark.parametrize("loss", [0.0001, 0.004, 0.0072, 0.05])
 def test_the_clamp_force_axis_holds_the_whole_history(tmp_path, monkeypatch, loss):
-    force = 806_222.0 * (1.0 - loss * np.linspace(0.0, 1.0, 12) ** 2)  # N
+    force = 806_222.0 * (1.0 - loss * np.linspace(0.0, 1.0, 12) ** 8)  # N, the loss at the end
     with h5py.File(tmp_path / "cycles.h5", "w") as file:
         cycles = file.create_group("cycles")
         cycles["phase"] = np.r_[np.ones(4), 2 * np.ones(8)].astype(int)
