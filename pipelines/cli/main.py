@@ -142,7 +142,8 @@ def _human_summary(outcome) -> str:
     if short:
         lines.append(short)
     if s.get("min_stick_margin") is not None:
-        lines.append(f"  smallest safety margin of stuck points: {s['min_stick_margin']:.3f}")
+        lines.append(f"  smallest stick margin of stuck points: {s['min_stick_margin']:.3f} (1 − max |τ|/p / μ_max: "
+                     "against the COF sliding can raise a point to, not against its present COF)")
     if s.get("fdp_max_MPa_mm") is not None:
         lines.append(f"  fretting damage: FDP max {s['fdp_max_MPa_mm']:.4g} MPa·mm, FFDP max {s['ffdp_max_MPa2_mm']:.4g} "
                      f"MPa²·mm at {np.round(s['ffdp_max_location_mm'], 2).tolist()} mm")

@@ -28,7 +28,7 @@ KEY_FIGURES = (
     ("cycles_run", "simulated cycles", None), ("equivalent_cycles", "real cycles", None),
     ("stick_area_fraction", "stick area", "%"), ("slip_area_fraction", "at the friction limit", "%"),
     ("damaged_area_fraction", "at μ_max (damaged) area", "%"), ("active_slip_area_fraction", "still sliding (verdict)", "%"),
-    ("cof_evolved_area_fraction", "COF evolved area", "%"), ("min_stick_margin", "smallest stick margin", None),
+    ("cof_evolved_area_fraction", "COF evolved area", "%"), ("min_stick_margin", "smallest stick margin of stuck points, 1 − max |τ|/p / μ_max", None),
     ("max_wear_depth_mm", "max wear depth [mm]", None), ("wear_volume_mm3", "wear volume [mm³]", None),
     ("dissipated_energy_mJ", "dissipated energy, simulated cycles [mJ]", None),
     ("bolt_force_initial_N", "clamp force initial [N]", None), ("bolt_force_final_N", "clamp force final [N]", None),
