@@ -427,8 +427,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="with --margins: wing amplitude range of the limit search, µm (default %(default)s)")
     sweep.add_argument("--tolerance", type=float, default=10.0, action=_MarginsOnly,
                        help="with --margins: limit tolerance, µm")
-    sweep.add_argument("--quiet", nargs=0, default=False, const=True, action=_MarginsOnly,
-                       help="with --margins: no progress bars")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bars")
     _add_cache_arguments(sweep)
     sweep.set_defaults(multibody_handler=sweep.get_default("handler"), handler=cmd_sweep, margins_only=[])
     add_run_parser(sub)

@@ -135,7 +135,8 @@ def run_sweep(args) -> int:
         speeds = parse_speeds(args.speeds)
         for message in sweep_warnings(params, speeds, args.speeds):
             print(f"fretwork: warning: {message}", file=sys.stderr)
-        result = speed_sweep(params, speeds, path=path, progress=True, scheduler=args.scheduler,
+        result = speed_sweep(params, speeds, path=path, progress=not getattr(args, "quiet", False),
+                             scheduler=args.scheduler,
                              workers=args.workers)
     except InputError as error:
         print(f"fretwork: error: {error}", file=sys.stderr)

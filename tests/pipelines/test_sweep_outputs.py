@@ -197,7 +197,7 @@ def test_mbs_does_not_rename_over_a_run_file_already_beside_the_named_one(tmp_pa
 @pytest.mark.parametrize("options, named", [
     (["--amplitude", "100:400"], "--amplitude is"),
     (["--amplitude", "100:400", "--tolerance", "5"], "--amplitude and --tolerance are"),
-    (["--tolerance", "5", "--quiet"], "--tolerance and --quiet are"),
+    (["--tolerance", "5", "--quiet"], "--tolerance is"),  # --quiet quiets the plain sweep's progress too
     (["--amplitude", "400:100"], "--amplitude is"),  # not even checked: it is not used
 ])
 def test_margin_options_without_margins_are_said_to_be_ignored(tmp_path, monkeypatch, capsys, options, named):
@@ -208,6 +208,22 @@ def test_margin_options_without_margins_are_said_to_be_ignored(tmp_path, monkeyp
     assert (f"fretwork: warning: {named} for --margins only: ignored (the sweep runs without the amplitude limit "
             "and the margins)") in error
     assert error.count("warning") == 1 and "stopped by the test" in error
+
+
+def test_a_quiet_sweep_draws_no_progress_bar(tmp_path, monkeypatch):
+    import pipelines.cli.mbs as cli
+    from reduction.errors import InputError
+
+    asked = {}
+
+    def swept(params, speeds, **kwargs):
+        asked.update(kwargs)
+        raise InputError("stopped by the test")
+
+    monkeypatch.setattr(cli, "speed_sweep", swept)
+    main(["sweep", str(_scene(tmp_path)), "--speeds", "700", "--workers", "0", "--out", str(tmp_path / "q"),
+          "--quiet"])
+    assert asked["progress"] is False
 
 
 def test_a_sweep_without_margin_options_or_with_margins_says_nothing_of_them(tmp_path, monkeypatch, capsys):
