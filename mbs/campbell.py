@@ -72,7 +72,8 @@ def rotating_eigenfrequencies(reduced: ReducedCounterweight, speeds_rpm) -> np.n
 
 def order_crossings(speeds_rpm, frequencies, orders) -> list:
     """Speeds where an engine-order line f = order * rpm / 60 crosses a mode line (linear
-    interpolation between the given speeds)."""
+    interpolation between the given speeds). Each crossing names the mode by its column
+    (``mode``, 0 the lowest) and as an engineer counts it (``mode_number``, 1 the lowest)."""
     speeds = np.asarray(speeds_rpm, dtype=float)
     crossings = []
     for order in np.asarray(orders, dtype=float):
@@ -84,7 +85,8 @@ def order_crossings(speeds_rpm, frequencies, orders) -> list:
                     continue
                 fraction = gap[i] / (gap[i] - gap[i + 1])
                 speed = speeds[i] + fraction * (speeds[i + 1] - speeds[i])
-                crossings.append({"order": float(order), "mode": int(mode), "speed_rpm": float(speed),
+                crossings.append({"order": float(order), "mode": int(mode), "mode_number": int(mode) + 1,
+                                  "speed_rpm": float(speed),
                                   "frequency_hz": float(order * speed / 60.0)})
     return sorted(crossings, key=lambda c: c["speed_rpm"])
 

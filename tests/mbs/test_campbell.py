@@ -28,3 +28,13 @@ def test_diagram_flags_the_gear_mesh_crossing_of_the_torsion_mode(reduced_cw4):
     campbell = campbell_diagram(reduced_cw4, np.linspace(500.0, 800.0, 31), [48.0])
     torsion = [c for c in campbell.crossings if c["mode"] == reduced_cw4.torsion_mode]
     assert torsion[0]["speed_rpm"] == pytest.approx(60.0 * reduced_cw4.torsion_frequency / 48.0, rel=1e-3)
+
+
+def test_a_crossing_names_its_mode_as_the_text_output_counts_it():
+    """`--json` said mode 1/2/3 (the column) where the text said mode 2/3/4 (QA): each crossing
+    also carries the count from 1, mode_number."""
+    speeds = np.array([600.0, 900.0])
+    frequencies = np.array([[5.0, 12.0], [5.0, 12.0]])  # Hz, two modes; order 1 crosses the second at 720 rpm
+    (crossing,) = order_crossings(speeds, frequencies, [1.0])
+    assert crossing["mode"] == 1 and crossing["mode_number"] == 2
+    assert crossing["speed_rpm"] == pytest.approx(720.0)
