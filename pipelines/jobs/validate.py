@@ -131,7 +131,7 @@ def check_energy(scene_path, overrides, cycles, increments) -> list[dict]:
     slip_amplitude = centre_stroke(model, result)
     cycle_dissipation = float(np.sum(last.dissipation_in_cycle * area))
     return [
-        record("cylinder_on_plane/energy", "worn area / (w x global dissipation)", worn_area,
+        record("cylinder_on_plane/energy", "worn area vs w x global dissipation [mm^2 per mm of length]", worn_area,
                w_total * dissipation_global, 0.01),
         record("cylinder_on_plane/energy", "dissipation per gross-slip cycle [mJ/mm]", cycle_dissipation,
                4.0 * COF * LINE_LOAD * (slip_amplitude - model.law.critical_slip), 0.05),
@@ -368,7 +368,7 @@ def check_finite_sliding(scene_path, overrides, cycles, increments, out_dir: Pat
                    cylinder, cylinder_reference, element / cylinder_reference),
             record(case, f"flat scar width at {f:.0%} depth vs the cylinder's swept by +-stroke [mm]",
                    flat, flat_reference, element / flat_reference),
-            record(case, "worn area / (w x global dissipation)", worn,
+            record(case, "worn area vs w x global dissipation [mm^2 per mm of length]", worn,
                    sum(model.law.wear_coefficients) * global_dissipation, 0.005)]
 
 

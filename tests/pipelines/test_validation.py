@@ -33,7 +33,7 @@ PINNED = {
     ("cylinder_on_plane/hertz", "peak pressure p0"): 0.02,
     ("cylinder_on_plane/hertz", "half-width a"): 0.02,
     ("cylinder_on_plane/cattaneo_mindlin", "stick half-width c"): 0.05,
-    ("cylinder_on_plane/energy", "worn area / (w x global dissipation)"): 0.01,
+    ("cylinder_on_plane/energy", "worn area vs w x global dissipation [mm^2 per mm of length]"): 0.01,
     ("cylinder_on_plane/energy", "dissipation per gross-slip cycle"): 0.05,
     ("cylinder_on_plane/slip", "slip amplitude at the centre"): 0.03,
     ("cylinder_on_plane/wear_geometry", "max wear depth"): 0.05,
@@ -44,7 +44,7 @@ PINNED = {
     ("flat_blocks/mortar_patch", "pressure, worst point, 3D 10x10 on 7x7"): 1e-5,
     ("cylinder_on_plane/finite_sliding", "cylinder scar width at 10% depth vs Hertz 2a"): one_element(0.1),
     ("cylinder_on_plane/finite_sliding", "flat scar width at 10% depth vs the cylinder's swept"): one_element(0.1),
-    ("cylinder_on_plane/finite_sliding", "worn area / (w x global dissipation)"): 0.005,
+    ("cylinder_on_plane/finite_sliding", "worn area vs w x global dissipation [mm^2 per mm of length]"): 0.005,
 }
 
 
