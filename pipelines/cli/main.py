@@ -816,6 +816,11 @@ def _main(argv, resumable: list) -> int:
     except Exception as error:
         if os.environ.get("FRETWORK_TRACEBACK"):
             raise
+        if type(error).__name__ == "SimulationError" and type(error).__module__ == "mbs.model":
+            # the multibody integration failed (a scene's coupled stage): not an internal error
+            print(f"fretwork: error: the multibody run stopped: {error} (a value a warning above named, or "
+                  "too coarse a [mbs.solver] time_step, is the usual cause)", file=sys.stderr)
+            return 1
         print(f"fretwork: error: {_unexpected(error)}", file=sys.stderr)
         return 1
 
