@@ -809,6 +809,11 @@ def _main(argv, resumable: list) -> int:
         return 2
     except ConvergenceError as error:
         print(f"fretwork: error: the simulation stopped: {error}{_stopped_hint(args, error)}", file=sys.stderr)
+        if getattr(args, "json", False) and args.command == "run":
+            # a script reading --json gets how the run ended, not an empty output
+            ending = getattr(error, "ending", None)
+            print(_json({"verdict": None, "ending": ending.value if ending is not None else "diverged",
+                         "error": str(error), "out": str(args.out)}))
         return 1
     except (OSError, UnicodeDecodeError) as error:  # a file that cannot be read or written
         print(f"fretwork: error: {_unexpected(error)}", file=sys.stderr)

@@ -94,3 +94,15 @@ def test_the_maps_of_a_run_that_slid_off_in_its_wear_phase_say_so(tmp_path, draw
     assert all("the run stopped in cycle 6: the joint slides off" in titles for titles, _ in drawn.values())
     assert "pressure, cycle 3 (the last recorded)" in drawn["pressure_map.png"][0]
     assert {name: problems for name, (_, problems) in drawn.items() if problems} == {}
+
+
+def test_a_stopped_run_still_answers_json(coarse_cylinder, tmp_path, capsys):
+    """`run --json` of a run that stops prints how it ended, so a script gets valid JSON (QA: it
+    printed nothing)."""
+    import json
+
+    out = tmp_path / "out"
+    assert main(["run", str(_sliding_scene(coarse_cylinder, 6)), "--out", str(out), "--quiet", "--json"]) == 1
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["verdict"] is None and printed["ending"] == "slid_off"
+    assert "tangential equilibrium is lost" in printed["error"] and printed["out"] == str(out)
