@@ -149,13 +149,20 @@ def write_report(results_dir: str | Path, out_path: str | Path | None = None) ->
     root = Path(results_dir)
     if not root.is_dir():
         raise InputError(f"{root} is not a folder of results (give the --out folder of a run or a job)")
-    results = sorted(root.rglob("results.h5"))
-    jobs = sorted(p for p in root.rglob("*.json") if p.name in ("summary.json", "limit.json", "margins.json"))
-    sweeps = sorted(root.rglob("sweep.h5"))
+    def shallow_first(paths):  # a job's own summary and run before the runs of its search
+        return sorted(paths, key=lambda path: (len(path.relative_to(root).parts), path))
+
+    results = shallow_first(root.rglob("results.h5"))
+    jobs = shallow_first(p for p in root.rglob("*.json") if p.name in ("summary.json", "limit.json", "margins.json"))
+    sweeps = shallow_first(root.rglob("sweep.h5"))
     images = sorted(root.rglob("*.png"))
     if not (results or jobs or images):
+        unfinished = sorted(root.rglob("results.h5.part"))
+        if unfinished:
+            raise InputError(f"{root} holds only {unfinished[0].relative_to(root)}: its run stopped before it "
+                             "finished a cycle (the error it printed says why); nothing converged to report")
         raise InputError(f"{root} holds no fretwork results (results.h5, summary.json or plots)")
-    sections = [_run_section(p, root) for p in results] + [_job_section(p, root) for p in jobs]
+    sections = [_job_section(p, root) for p in jobs] + [_run_section(p, root) for p in results]
     sections += [_margins_section(p, root) for p in sweeps]
     plots = "".join(_image(p, root) for p in images)
     version_rows = [(k, html.escape(v)) for k, v in versions().items()]

@@ -88,3 +88,27 @@ def test_report_names_its_positional_argument(tmp_path, capsys):
     assert main(["report", str(afile)]) == 2
     assert capsys.readouterr().err == (f"fretwork: error: {afile} is not a folder of results (give the --out "
                                        "folder of a run or a job)\n")
+
+
+def test_a_jobs_report_leads_with_its_summary_and_its_own_run(report, tmp_path):
+    """The demo's page began with nine limit runs, the first verdict on it a 900 rpm scan run's
+    (QA): the job's summary comes first, then its shallowest run, then the search's runs."""
+    import json
+
+    _, outcome = report
+    job = tmp_path / "demo"
+    for folder in ("limit/amplitude_0100.00um", "limit/amplitude_0400.00um", "operating"):
+        (job / folder).mkdir(parents=True)
+        shutil.copy(outcome.results_path, job / folder / "results.h5")
+    (job / "summary.json").write_text(json.dumps({"summary": {"verdict": "stick", "margin_at_operating_point": 2.0}}))
+    page = write_report(job).read_text()
+    order = [page.index(name) for name in ("<h2>summary.json", "operating/results.h5",
+                                           "limit/amplitude_0100.00um/results.h5", "limit/amplitude_0400.00um/results.h5")]
+    assert order == sorted(order)
+
+
+def test_a_run_that_stopped_before_its_first_cycle_is_said_so(tmp_path, capsys):
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "results.h5.part").write_bytes(b"")
+    assert main(["report", str(tmp_path / "out")]) == 2
+    assert "holds only results.h5.part: its run stopped before it finished a cycle" in capsys.readouterr().err
