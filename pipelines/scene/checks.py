@@ -486,6 +486,10 @@ UNIT_MATCH = 2.0
 _RPM_PER = {"rad/s": 30.0 / math.pi, "Hz": 60.0, "°/s": 1.0 / 6.0}
 
 
+#: a pretension that stretches its bolt by less than this (mm) is likely typed in kN
+BOLT_STRETCH_MM = 2e-3
+
+
 def engine_speed_warnings(speeds, named: str, reference_rpm: float | None = None,
                           reference_named: str = "[mbs] speed_rpm") -> list[str]:
     """Warnings about engine speeds (rpm) that are likely a unit mistake, at most one for those
@@ -602,9 +606,18 @@ def plausibility(data: dict) -> list[str]:
                      f"(mm expected: {slip:g} µm is {1e-3 * slip:g} mm)")
     for name, bolt in table("bolts").items():
         pretension = bolt.get("pretension") if isinstance(bolt, dict) else None
+        stiffness = bolt.get("stiffness") if isinstance(bolt, dict) else None
         if _number(pretension) and 0 < pretension < 100.0:
             found.append(f"'bolts.{name}.pretension' = {pretension:g} N is below 100 N: probably kN "
                          f"(N expected: {pretension:g} kN is {1e3 * pretension:g} N)")
+        elif _number(pretension) and _number(stiffness) and pretension > 0 and stiffness > 0 \
+                and pretension / stiffness < BOLT_STRETCH_MM:
+            # a preloaded bolt stretches by tens to hundreds of µm (the shipped joints 25-775 µm;
+            # an M3 screw at 2 kN on 1e5 N/mm, 20 µm): 400 N on 8e5 N/mm is 400 kN typed in kN
+            found.append(f"'bolts.{name}.pretension' = {pretension:g} N stretches the bolt ('stiffness' = "
+                         f"{stiffness:g} N/mm) by {1e3 * pretension / stiffness:.2g} µm, where a preloaded bolt "
+                         f"stretches by tens of µm or more: probably kN (N expected: {pretension:g} kN is "
+                         f"{1e3 * pretension:g} N), or the stiffness is in N/m")
     loads = data.get("body_loads") if isinstance(data.get("body_loads"), list) else []
     for k, load in enumerate(entry for entry in loads if isinstance(entry, dict)):
         acceleration = load.get("acceleration")

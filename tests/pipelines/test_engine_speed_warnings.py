@@ -80,3 +80,13 @@ def test_fretwork_sweep_with_margins_warns_once_of_its_speeds(tmp_path, capsys):
     assert error.count("warning") == 1
     assert "fretwork: warning: --speeds 10,12.5: 10 and 12.5 rpm are all below a fifth" in error
     assert "fretwork: error:" in error
+
+
+def test_a_pretension_that_barely_stretches_its_bolt_is_said_to_be_in_kn():
+    """400 N on an 8e5 N/mm screw stretches it 0.5 µm: 400 kN typed in kN (QA: no warning, then
+    a Newton failure advising to prescribe a motion). Real preloads stretch tens of µm or more."""
+    warning, = plausibility({"bolts": {"screw_1": {"pretension": 400.0, "stiffness": 8e5}}})
+    assert warning.startswith("'bolts.screw_1.pretension' = 400 N stretches the bolt ('stiffness' = 800000 N/mm) "
+                              "by 0.5 µm") and "probably kN" in warning
+    assert plausibility({"bolts": {"screw_1": {"pretension": 4e5, "stiffness": 8e5}}}) == []  # 500 µm
+    assert plausibility({"bolts": {"m3": {"pretension": 2000.0, "stiffness": 1e5}}}) == []  # 20 µm
