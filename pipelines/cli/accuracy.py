@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import json
 import sys
 import tomllib
 from pathlib import Path
 
+from pipelines.cli import json_text
 from pipelines.parallel import add_cluster_arguments
 from reduction.errors import InputError
 
@@ -54,7 +54,7 @@ def cmd_accuracy(args) -> int:
                            scheduler=args.scheduler, workers=args.workers)
     out = Path(args.out)
     study.plot = str(plot_pareto(study.to_dict(), out / f"accuracy_{study.scene}.png"))
-    text = json.dumps(study.to_dict(), indent=2, default=float)
+    text = json_text(study.to_dict())
     (out / f"accuracy_{study.scene}.json").write_text(text)
     print(text if args.json else "\n".join(table_lines(study)))
     return 0

@@ -10,8 +10,6 @@ command that writes files checks and locks its ``--out`` folder before any work
 from __future__ import annotations
 
 import argparse
-import json
-import math
 import os
 import re
 import signal
@@ -24,23 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from pipelines import interrupts
+from pipelines.cli import json_text
 from reduction.errors import InputError, listed
-
-
-def _finite(value):
-    """``value`` with every non-finite float (inf, NaN) as None: JSON has no Infinity or NaN,
-    and a strict reader refuses them."""
-    if isinstance(value, dict):
-        return {key: _finite(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(item) for item in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    return value
-
-
-def _json(value) -> str:
-    return json.dumps(_finite(value), indent=2, default=float, allow_nan=False)
 
 
 def _cache(args):
@@ -70,7 +53,7 @@ def cmd_run(args) -> int:
     outcome = run_scene(loaded, args.out, progress=not args.quiet, resume=args.resume,
                         cache=StageCache(_cache(args)))
     if args.json:
-        print(_json(outcome.summary))
+        print(json_text(outcome.summary))
     else:
         print(_human_summary(outcome))
     return 0
@@ -171,7 +154,7 @@ def cmd_validate(args) -> int:
 
     records = run_validation(quick=args.quick, out_dir=Path(args.out), progress=not args.json)
     if args.json:
-        print(_json(records))
+        print(json_text(records))
     else:
         for r in records:
             mark = "PASS" if r["passed"] else "FAIL"
@@ -184,7 +167,7 @@ def cmd_demo(args) -> int:
     from pipelines.jobs.demo import describe, run_demo
 
     result = run_demo(args.out, cache_dir=_cache(args), workers=args.workers, progress=not args.quiet)
-    print(_json({"summary": result.summary, "stage_times_s": result.stage_times, "files": result.files})
+    print(json_text({"summary": result.summary, "stage_times_s": result.stage_times, "files": result.files})
           if args.json else describe(result))
     return 0
 
@@ -204,7 +187,7 @@ def cmd_limit(args) -> int:
     plot = plot_limit(result, out / "limit.png", name)
     summary = dict(result.to_json(), plot=str(plot), file=str(write_limit(result, out / "limit.json")))
     if args.json:
-        print(_json(summary))
+        print(json_text(summary))
     else:
         for run in summary["runs"]:
             print(f"  {format_um(1e-3 * run['amplitude_um'], result.tolerance_mm):>8} µm: "
@@ -251,7 +234,7 @@ def cmd_sweep(args) -> int:
     plot = plot_margins(result, plots / "margins.png", f"{name}: fretting safety margin")
     summary = dict(result.to_json(), file=str(out), plot=str(plot), sweep=swept)
     if args.json:
-        print(_json(summary))
+        print(json_text(summary))
     else:
         print(f"{'rpm':>8} {'wing µm':>9} {'margin':>8}")
         flags = {"unsafe": "  < 1: UNSAFE", "at the limit": "  at the limit (within the tolerance)", "safe": "",
@@ -278,7 +261,7 @@ def cmd_reduce(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     plot = plot_error_vs_modes(report, out / "reduction_error_vs_modes.png")
     if args.json:
-        print(_json({"summary": report.summary(), "records": report.to_records(), "plot": str(plot)}))
+        print(json_text({"summary": report.summary(), "records": report.to_records(), "plot": str(plot)}))
     else:
         for key, value in report.summary().items():
             print(f"  {key}: {value}")
@@ -306,7 +289,7 @@ def cmd_study(args) -> int:
                "plot": str(plot_constant_cof(comparison, out / "constant_cof.png")),
                "file": str(write_comparison(comparison, out / "constant_cof.h5"))}
     if args.json:
-        print(_json(summary))
+        print(json_text(summary))
     else:
         for r in summary["records"]:
             print(f"{r['model']:<20} {r['probe']} at {np.round(r['position_mm'], 2)} mm "
@@ -349,9 +332,9 @@ def cmd_convergence(args) -> int:
     study["plot"] = str(plot_convergence(study, out / "convergence.png"))
     histories = plot_histories(study, out / "convergence_cycles.png")
     study["history_plot"] = None if histories is None else str(histories)
-    (out / "convergence.json").write_text(_json(study))
+    (out / "convergence.json").write_text(json_text(study))
     if args.json:
-        print(_json(study))
+        print(json_text(study))
         return 0
     levels = sorted(study["levels"], key=lambda level: -level["size_mm"])  # coarse first
     print(f"{'size mm':>8} {'points':>7} {'verdict':>10} {'stick %':>8} {'sliding %':>9} {'worn %':>7} "
@@ -812,7 +795,7 @@ def _main(argv, resumable: list) -> int:
         if getattr(args, "json", False) and args.command == "run":
             # a script reading --json gets how the run ended, not an empty output
             ending = getattr(error, "ending", None)
-            print(_json({"verdict": None, "ending": ending.value if ending is not None else "diverged",
+            print(json_text({"verdict": None, "ending": ending.value if ending is not None else "diverged",
                          "error": str(error), "out": str(args.out)}))
         return 1
     except (OSError, UnicodeDecodeError) as error:  # a file that cannot be read or written

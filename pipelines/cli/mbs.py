@@ -12,7 +12,6 @@ and calls args.handler(args). Summaries go to stdout (JSON with --json), progres
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import tomllib
@@ -26,6 +25,7 @@ from mbs.parameters import ModelParams
 from mbs.plots import plot_campbell, plot_sweep
 from mbs.run import run_model
 from mbs.sweep import SweepResult
+from pipelines.cli import json_text
 from pipelines.jobs.sweep import check_resolution, output_paths, parse_speeds, speed_sweep, sweep_paths
 from pipelines.parallel import add_cluster_arguments
 from pipelines.scene.checks import engine_speed_warnings
@@ -143,7 +143,7 @@ def run_sweep(args) -> int:
         return 2
     summary = sweep_summary(result, path, Path(args.plots) if args.plots else folder)
     if args.json:
-        print(json.dumps(summary, indent=2))
+        print(json_text(summary))
     else:
         print(_table(result))
         print(f"results: {path}, plots: {', '.join(summary['plots'].values())}")
@@ -221,7 +221,7 @@ def run_single(args) -> int:
     if interface is not None:
         summary["interface_histories"] = interface
         summary["counterweight"] = counterweight
-    print(json.dumps(summary, indent=2) if args.json else describe_run(summary, params))
+    print(json_text(summary) if args.json else describe_run(summary, params))
     message = unsettled_message(histories.unsettled_change, params.solver.revolutions, params.speed_rpm)
     if message is not None:
         print(f"fretwork: warning: {message}", file=sys.stderr)

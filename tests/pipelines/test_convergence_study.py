@@ -50,9 +50,9 @@ def test_an_exact_figure_extrapolates_to_itself():
 def test_the_json_of_a_study_is_strict_json():
     import json
 
-    from pipelines.cli.main import _json
+    from pipelines.cli import json_text
 
-    text = _json({"order": float("inf"), "values": [1.0, float("nan")], "nested": {"x": np.float64("-inf")}})
+    text = json_text({"order": float("inf"), "values": [1.0, float("nan")], "nested": {"x": np.float64("-inf")}})
     assert json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in JSON")) == {
         "order": None, "values": [1.0, None], "nested": {"x": None}}
 
