@@ -126,7 +126,6 @@ class BoltSet:
                                                    - self.locked_elongation)
 
 
-
 @dataclass(frozen=True)
 class RingOffset:
     """Where a bolt end's coupled nodes (its ring) lie against its reference point, mm.
@@ -150,17 +149,19 @@ def ring_offset(coordinates: np.ndarray, position: np.ndarray, axis: np.ndarray)
     """The :class:`RingOffset` of nodes at ``coordinates`` (n, dim) mm coupled to a reference point
     at ``position`` (dim,) mm, for a bolt along ``axis`` (dim,)."""
     coordinates = np.asarray(coordinates, dtype=float)
-    axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
     centre = 0.5 * (coordinates.min(axis=0) + coordinates.max(axis=0))
-
-    def across(vectors):
-        return vectors - np.outer(vectors @ axis, axis)
-
     relative = coordinates - centre
     offset = np.asarray(position, dtype=float) - centre
-    return RingOffset(centre, float(np.linalg.norm(offset)), float(np.linalg.norm(across(offset[None])[0])),
-                      float(np.sqrt(np.mean(np.sum(across(relative) ** 2, axis=1)))),
+    return RingOffset(centre, float(np.linalg.norm(offset)), float(np.linalg.norm(_across(offset[None], axis)[0])),
+                      float(np.sqrt(np.mean(np.sum(_across(relative, axis) ** 2, axis=1)))),
                       float(np.max(np.linalg.norm(relative, axis=1))))
+
+
+def _across(vectors: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """The parts of ``vectors`` (n, dim) across ``axis`` (dim,): their components along it removed."""
+    axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    return vectors - np.outer(vectors @ axis, axis)
+
 
 def joint_tilt(axis: np.ndarray, facet_normals: np.ndarray, facet_areas: np.ndarray) -> float:
     """Angle (degrees, 0…90) between a bolt's axis and the joint's normal: the area-weighted
@@ -175,7 +176,5 @@ def joint_tilt(axis: np.ndarray, facet_normals: np.ndarray, facet_areas: np.ndar
 def facets_near_axis(centroids: np.ndarray, point: np.ndarray, axis: np.ndarray, radius: float) -> np.ndarray:
     """Boolean mask of facet ``centroids`` (n, dim) mm within ``radius`` mm of the line through
     ``point`` along ``axis`` (a bolt's axis through its head)."""
-    axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
     relative = np.asarray(centroids, dtype=float) - np.asarray(point, dtype=float)
-    across = relative - np.outer(relative @ axis, axis)
-    return np.linalg.norm(across, axis=1) <= radius
+    return np.linalg.norm(_across(relative, axis), axis=1) <= radius

@@ -201,6 +201,7 @@ def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_d
     from contact.procedure import RunStopped
     from pipelines.coupling import coupled_program
     from pipelines.jobs.run import run_model
+    from pipelines.jobs.scan import decimal_mm
     from pipelines.stages import StageCache
 
     scene = coupled_scene(scene_path, overrides)
@@ -223,7 +224,7 @@ def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_d
         summary = {k: v for k, v in outcome.summary.items() if isinstance(v, (int, float, str, type(None)))}
         return AmplitudeRun(amplitude_mm, outcome.summary["verdict"], summary)
 
-    inputs = {"scene": scene.data, "amplitude_mm": round(float(amplitude_mm), 9)}
+    inputs = {"scene": scene.data, "amplitude_mm": decimal_mm(amplitude_mm)}
     return cache.get("contact_run", inputs, compute)
 
 

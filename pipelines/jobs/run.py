@@ -151,13 +151,13 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
                                checkpoint_every=settings.get("checkpoint_every", 10),
                                resume=writer.snapshot)
     except RunStopped as stopped:
-        if stopped.ending not in EARLY_ENDINGS:
+        early = stopped.ending in EARLY_ENDINGS
+        if early:
+            path = writer.stop(stopped.ending, str(stopped))
+        else:
             writer.abort()
-            bar.close(ENDINGS[stopped.ending])
-            raise
-        path = writer.stop(stopped.ending, str(stopped))
         bar.close(ENDINGS[stopped.ending])
-        if plots:  # what converged before the joint failed, the failure marked
+        if early and plots:  # what converged before the joint failed, the failure marked
             plot_results(path, out_dir / "plots")
         raise
     except (ConvergenceError, KeyboardInterrupt):

@@ -73,7 +73,7 @@ class Scan:
         return limit is None or all(v != SAFE for a, v in self.sorted() if a > limit)
 
 
-def _decimal(amplitude_mm) -> float:
+def decimal_mm(amplitude_mm) -> float:
     """An amplitude (mm) rounded to 1e-9 mm: the value its decimal digits say, as a scene would
     state it (the grid's and the bisection's arithmetic left 238.74999999999997 µm, shown as
     238.7, and a run at it differed from a run at 238.75 µm in its last digits)."""
@@ -91,12 +91,12 @@ def scan(evaluate: Callable[[Sequence[float]], dict], low_mm: float, high_mm: fl
     if grid < 2:
         raise ValueError("the scan needs a grid of at least 2 amplitudes")
     result = Scan()
-    result.verdicts.update(evaluate([_decimal(a) for a in np.linspace(low_mm, high_mm, grid)]))
+    result.verdicts.update(evaluate([decimal_mm(a) for a in np.linspace(low_mm, high_mm, grid)]))
     while True:
         wide = [c for c in result.changes if c.above_mm - c.below_mm > tolerance_mm]
         if not wide:
             return result
         share = max(1, parallel // len(wide))
-        points = [_decimal(c.below_mm + (c.above_mm - c.below_mm) * k / (share + 1))
+        points = [decimal_mm(c.below_mm + (c.above_mm - c.below_mm) * k / (share + 1))
                   for c in wide for k in range(1, share + 1)]
         result.verdicts.update(evaluate(points))

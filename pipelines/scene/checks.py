@@ -287,7 +287,6 @@ def _bolt_axis_problems(name, bolt, axis, head, nut, dim) -> list[str]:
             "the axis must point from the head to the nut"]
 
 
-
 class SceneWarning(UserWarning):
     """A scene that builds and runs but most likely does not model what was meant (a bolt that
     shears its joint, a reference point away from the nodes it couples). Issued with
@@ -363,6 +362,7 @@ def ring_offset_finding(key: str, position, ring) -> tuple[str | None, str | Non
                       f"centre and, with rotations coupled, tilts it (bearing pressure {pressure} round the "
                       "ring); give the centre of the ring as the position, or couple nodes centred on it")
     return None, None
+
 
 def held_groups(data) -> list[list[str]]:
     """The bodies in groups joined by the contact or a bolt, each group a list of names."""
@@ -486,10 +486,6 @@ UNIT_MATCH = 2.0
 _RPM_PER = {"rad/s": 30.0 / math.pi, "Hz": 60.0, "°/s": 1.0 / 6.0}
 
 
-#: a pretension that stretches its bolt by less than this (mm) is likely typed in kN
-BOLT_STRETCH_MM = 2e-3
-
-
 def engine_speed_warnings(speeds, named: str, reference_rpm: float | None = None,
                           reference_named: str = "[mbs] speed_rpm") -> list[str]:
     """Warnings about engine speeds (rpm) that are likely a unit mistake, at most one for those
@@ -577,6 +573,10 @@ def _material_warnings(name, material) -> list[str]:
                          f"(t/mm³ expected: {density:g} {unit} is {scale * density:g} t/mm³)")
             break
     return found
+
+
+#: a pretension that stretches its bolt by less than this (mm) is likely typed in kN
+BOLT_STRETCH_MM = 2e-3
 
 
 def plausibility(data: dict) -> list[str]:
