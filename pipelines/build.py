@@ -31,6 +31,7 @@ from reduction.body_loads import centrifugal, gravity
 from reduction.elasticity import assemble_elastic_body
 from reduction.errors import InputError
 from reduction.mesh.selection import select_body_nodes, select_facets
+from reduction.threads import one_blas_thread
 
 COMPONENTS = {"ux": 0, "uy": 1, "uz": 2}
 
@@ -233,6 +234,7 @@ def _law(scene: Scene) -> ContactLaw:
     )
 
 
+@one_blas_thread
 def build(scene: Scene, meshes_override: dict | None = None, *, cache: StageCache | None = None,
           multibody=None) -> Model:
     """Assemble and condense the scene's bodies and read its law, loads and procedure.

@@ -41,6 +41,7 @@ from pipelines.stages import StageCache
 from reduction import modal_loads
 from reduction.condensation import BoundarySchur, boundary_schur, condense_from_boundary
 from reduction.errors import InputError
+from reduction.threads import one_blas_thread
 
 
 @dataclass(frozen=True)
@@ -147,6 +148,7 @@ def histories_path(scene: Scene) -> Path | None:
     return path if path.is_absolute() or scene.path is None else scene.path.parent / path
 
 
+@one_blas_thread
 def multibody_loading(scene: Scene, cache: StageCache | None = None) -> MultibodyLoading:
     """The multibody stage of a coupled scene (read from the cache when its inputs are unchanged),
     or the scene's interface-histories file."""

@@ -105,10 +105,14 @@ def map_cases(function: Callable, cases: Sequence[tuple[object, dict]], *, sched
 
 
 def _call(function: Callable, kwargs: dict, **shared) -> tuple[bool, object]:
-    """Run one case; an exception comes back as text so that dask does not retry it."""
+    """Run one case on a dask worker; an exception comes back as text so that dask does not retry it."""
     from reduction.threads import pin_process
 
     pin_process()  # a worker of a cluster we did not start has the default thread count
+    return _run_case(function, kwargs, **shared)
+
+
+def _run_case(function: Callable, kwargs: dict, **shared) -> tuple[bool, object]:
     try:
         return True, function(**kwargs, **shared)
     except Exception as error:  # the case fails, the sweep goes on: report it, whatever it is
@@ -123,9 +127,12 @@ def _describe(error: BaseException | None, status: str = "") -> str:
 
 
 def _serial(function, cases, shared, label, progress) -> list[CaseOutcome]:
+    from reduction.threads import pinned_while_inside
+
     outcomes = []
     for key, kwargs in tqdm(cases, desc=label, unit="case", file=sys.stderr, disable=not progress):
-        ok, value = _call(function, kwargs, **shared)
+        with pinned_while_inside():  # this process is the caller's: its thread settings come back
+            ok, value = _run_case(function, kwargs, **shared)
         outcomes.append(CaseOutcome(key, value if ok else None, None if ok else value, 1))
     return outcomes
 

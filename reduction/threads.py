@@ -18,11 +18,19 @@ increments. Measured: with only the per-step limits, the counterweight scene (ex
 270 cycles) still ended with 37 result datasets different between one and two threads. So
 every fretwork process (the command line, each dask worker) also pins its BLAS to one thread
 for good (:func:`pin_process`); a limited block then restores one thread on exit.
+
+A program that imports fretwork as a library and calls a job (``run_scene``, ``build``, the
+limit scan...) has not pinned its process, and measured: a counterweight scene at the edge of
+sliding off then slid off where the command line's run ended ``damage``. Each job is therefore
+wrapped in :func:`one_blas_thread`: inside it the process runs as if pinned, and on leaving the
+outermost job the caller's thread settings come back.
 """
 
 from __future__ import annotations
 
+import functools
 import sys
+import threading
 from contextlib import contextmanager
 
 from threadpoolctl import ThreadpoolController
@@ -69,19 +77,74 @@ def single_threaded_blas():
     return blas_threads(1)
 
 
-def pin_process() -> None:
-    """Limit every BLAS (NumPy's and SciPy's OpenBLAS, MKL) to one thread for the rest of the
-    process. NumPy, SciPy and MKL (PARDISO's, when installed) are loaded first: threadpoolctl
-    limits only the libraries that are loaded when it is called, and each brings its own
-    build (measured: with MKL loaded later, the coupled counterweight's condensed inertia
-    patterns, and so its results, differed between one and two threads)."""
+def _load_blas_libraries() -> None:
+    """Import what brings a BLAS (NumPy, SciPy, MKL where PARDISO is installed), so that a limit
+    set now covers each of them."""
     import importlib
 
     from reduction import pardiso
 
     for module in ("numpy", "scipy.linalg", "scipy.sparse.linalg"):
         importlib.import_module(module)
-    global _pinned
     pardiso.available()  # loads MKL where pypardiso is installed
+
+
+_lent = threading.Lock()
+#: (library calls inside, the caller's limits to restore, the caller's record of a pinning)
+_lending: list = [0, None, None]
+
+
+@contextmanager
+def pinned_while_inside():
+    """The process pinned to one BLAS thread while inside the block, as :func:`pin_process` pins
+    it for good; on leaving the outermost such block the caller's thread limits (and record of
+    a pinning) come back. Nested blocks share one pinning, released by the outermost. Nothing
+    to do in a pinned process.
+
+    Jobs run concurrently on several threads of one process must pin it instead
+    (:func:`pin_process`, as each dask worker does): MKL's thread count is the calling
+    thread's (measured: a limit set on one thread left MKL at two threads on another)."""
+    with _lent:
+        if _lending[0] == 0:
+            if _pinned is not None and _pinned[1] == 1:
+                _lending[1:] = [None, None]
+            else:
+                _load_blas_libraries()
+                _lending[1:] = [blas_controller().limit(limits=1, user_api="blas"), _pinned]
+                _set_pinned((len(sys.modules), 1))
+        _lending[0] += 1
+    try:
+        yield
+    finally:
+        with _lent:
+            _lending[0] -= 1
+            if _lending[0] == 0 and _lending[1] is not None:
+                _lending[1].restore_original_limits()
+                _set_pinned(_lending[2])
+                _lending[1:] = [None, None]
+
+
+def _set_pinned(value) -> None:
+    global _pinned
+    _pinned = value
+
+
+def one_blas_thread(function):
+    """Decorate a job a library caller may call: it runs inside :func:`pinned_while_inside`."""
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        with pinned_while_inside():
+            return function(*args, **kwargs)
+    return wrapper
+
+
+def pin_process() -> None:
+    """Limit every BLAS (NumPy's and SciPy's OpenBLAS, MKL) to one thread for the rest of the
+    process. NumPy, SciPy and MKL (PARDISO's, when installed) are loaded first: threadpoolctl
+    limits only the libraries that are loaded when it is called, and each brings its own
+    build (measured: with MKL loaded later, the coupled counterweight's condensed inertia
+    patterns, and so its results, differed between one and two threads)."""
+    global _pinned
+    _load_blas_libraries()
     blas_controller().limit(limits=1, user_api="blas")
     _pinned = (len(sys.modules), 1)

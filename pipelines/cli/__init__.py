@@ -1,24 +1,3 @@
-"""The ``fretwork`` command line; :func:`json_text`, the JSON every command prints or writes."""
+"""The ``fretwork`` command line; its JSON is :func:`pipelines.output.jsonfile.json_text`."""
 
-import json
-import math
-
-import numpy as np
-
-
-def _finite(value):
-    """``value`` with every non-finite float (inf, NaN) as None: JSON has no Infinity or NaN,
-    and a strict reader refuses them."""
-    if isinstance(value, dict):
-        return {key: _finite(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(item) for item in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    return value
-
-
-def json_text(value) -> str:
-    """``value`` as strict JSON, indented: non-finite floats as null (``--json`` and the JSON
-    files of the commands)."""
-    return json.dumps(_finite(value), indent=2, default=float, allow_nan=False)
+from pipelines.output.jsonfile import json_text  # noqa: F401  (the commands import it from here)

@@ -14,7 +14,6 @@ the stage cache on a second run.
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,6 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from pipelines import examples
+from pipelines.output.jsonfile import json_text
+from reduction.threads import one_blas_thread
 
 DEFAULT_SCENE = examples.scene_path("counterweight")
 DEMO_OVERRIDES = {
@@ -51,6 +52,7 @@ def _overrides(scene_path, overrides) -> dict:
     return out
 
 
+@one_blas_thread
 def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DEMO_SPEEDS_RPM,
              amplitude_range_mm=DEMO_AMPLITUDE_RANGE_MM, tolerance_mm=DEMO_TOLERANCE_MM, cache_dir=None,
              workers=None, progress=True) -> DemoResult:
@@ -92,8 +94,7 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
     summary = _summary(scene.name, outcome.summary, limit, margins, times)
     files = {"results": str(outcome.results_path), "plots": str(out_dir / "operating" / "plots"),
              "limit_plot": str(limit_plot), "margins_plot": str(margin_plot), "sweep": str(sweep_path)}
-    (out_dir / "summary.json").write_text(json.dumps({"summary": summary, "stage_times_s": times, "files": files},
-                                                     indent=2, default=float))
+    (out_dir / "summary.json").write_text(json_text({"summary": summary, "stage_times_s": times, "files": files}))
     from pipelines.output.report import write_report
 
     files["report"] = str(write_report(out_dir))

@@ -20,7 +20,6 @@ Amplitudes in mm internally; the command line takes µm, as engineers quote wing
 from __future__ import annotations
 
 import itertools
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +28,9 @@ import numpy as np
 
 from contact.verdict import Ending
 from contact.solver import ConvergenceError
+from pipelines.output.jsonfile import json_text
 from reduction.errors import InputError
+from reduction.threads import one_blas_thread
 
 SAFE = "stick"
 NOT_CONVERGED = "not_converged"  # a run whose Newton failed even after its cutbacks: not shown to stick
@@ -228,6 +229,7 @@ def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_d
     return cache.get("contact_run", inputs, compute)
 
 
+@one_blas_thread
 def find_limit(scene_path, low_mm: float, high_mm: float, *, tolerance_mm: float = 0.01, grid: int = 7,
                overrides: dict | None = None, cache_dir=None, out_dir=None, scheduler: str | None = None,
                workers: int | None = None, progress: bool = True) -> LimitResult:
@@ -332,5 +334,5 @@ def describe_limit(result: LimitResult) -> str:
 
 def write_limit(result: LimitResult, path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(result.to_json(), indent=2))
+    path.write_text(json_text(result.to_json()))
     return path

@@ -27,6 +27,7 @@ import numpy as np
 from pipelines.coupling import CouplingSettings
 from pipelines.jobs.limit import LimitResult, find_limit
 from reduction.errors import InputError
+from reduction.threads import one_blas_thread
 
 
 @dataclass
@@ -127,6 +128,7 @@ def calibration_factor(scene, cache) -> tuple[float, str | None]:
     return float(stated) / loading.wing_amplitude, loading.unsettled
 
 
+@one_blas_thread
 def margin_sweep(scene_path, speeds, *, amplitude_range_mm, tolerance_mm, cache_dir=None, sweep_path=None,
                  out_dir=None, scheduler=None, workers=None, progress=True, overrides=None):
     """Speed sweep, amplitude limit and margins (module doc); returns (MarginResult, SweepResult)."""

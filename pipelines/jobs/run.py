@@ -27,6 +27,7 @@ from pipelines.output.results import ResultsWriter
 from pipelines.scene import Scene
 from pipelines.stages import StageCache
 from reduction.errors import InputError
+from reduction.threads import one_blas_thread
 
 
 class ProgressBar:
@@ -118,6 +119,7 @@ def _say(progress: bool, label: str, stage: str) -> None:
         print(f"{label}: {stage} ...", file=sys.stderr, flush=True)
 
 
+@one_blas_thread
 def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool = True,
               resume: bool = False) -> Outcome:
     stage_times = {}
@@ -212,6 +214,7 @@ def _engine_hours(summary: dict) -> dict:
             if summary.get(key) is not None}
 
 
+@one_blas_thread
 def run_scene(scene: Scene, out_dir: str | Path, *, progress: bool = True, plots: bool = True,
               resume: bool = False, cache: StageCache | None = None) -> Outcome:
     """Build the scene's model and run it into ``out_dir``; see :func:`run_model`.

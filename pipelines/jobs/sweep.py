@@ -20,6 +20,7 @@ from mbs.parameters import ModelParams
 from mbs.sweep import SweepResult, collect_sweep, run_speed, write_sweep
 from pipelines.parallel import map_cases
 from reduction.errors import InputError, listed
+from reduction.threads import one_blas_thread
 
 SWEEP_FILE = "sweep.h5"
 
@@ -132,6 +133,7 @@ def _speeds(resolutions) -> str:
     return listed([f"{r.speed_rpm:g}" for r in resolutions])
 
 
+@one_blas_thread
 def speed_sweep(model_params: ModelParams, speeds, *, path=None, progress: bool = False,
                 scheduler: str | None = None, workers: int | None = None) -> SweepResult:
     """Run model_params at every engine speed in ``speeds`` (rpm) and collect the sweep.

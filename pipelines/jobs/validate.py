@@ -50,6 +50,7 @@ from pipelines.build import build  # noqa: E402
 from reduction.mesh.motion import move_surface  # noqa: E402
 
 from pipelines import examples  # noqa: E402
+from reduction.threads import one_blas_thread  # noqa: E402
 
 SCENE = examples.scene_path("cylinder_on_plane")
 RADIUS, LINE_LOAD, YOUNG, POISSON, COF = 80.0, 1066.0, 120e3, 0.3, 0.56
@@ -420,6 +421,7 @@ def check_tangent() -> list[dict]:
     return records
 
 
+@one_blas_thread
 def run_validation(quick: bool = False, out_dir: Path = Path("results/validation"),
                    progress: bool = True, scene_path: Path = SCENE) -> list[dict]:
     """All validation records. ``quick`` shortens the wear histories for CI (and halves the

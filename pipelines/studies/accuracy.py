@@ -58,6 +58,7 @@ from pipelines.studies.knobs import (CONTACT_KNOBS, Run, SCALAR_QUANTITIES, Stud
                                      _multibody_overrides, _sweep,
                                      base_overrides, knobs_for,
                                      multibody_knobs, setting_overrides)
+from reduction.threads import one_blas_thread
 
 
 try:
@@ -95,6 +96,7 @@ def run_setting(scene_path: Path, overrides: dict, label: str, settings: dict, v
     return record
 
 
+@one_blas_thread
 def accuracy_study(scene_path: str | Path, *, quick: bool = False, overrides: dict | None = None,
                    sweeps: dict | None = None, on_run: Callable[[dict], None] | None = None,
                    scheduler: str | None = None, workers: int | None = None) -> Study:
@@ -151,6 +153,7 @@ def run_multibody_setting(scene_path: Path, overrides: dict, label: str, setting
     return record
 
 
+@one_blas_thread
 def multibody_study(scene_path: Path, *, quick: bool = False, overrides: dict | None = None,
                     sweeps: dict | None = None, on_run: Callable[[dict], None] | None = None,
                     scheduler: str | None = None, workers: int | None = None) -> Study:

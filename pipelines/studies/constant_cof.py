@@ -53,6 +53,7 @@ from pipelines.build import build
 from pipelines.coupling import multibody_loading
 from pipelines.output.results import AREA_UNITS, FIELD_UNITS, STATUS_NAMES
 from reduction.errors import InputError
+from reduction.threads import one_blas_thread
 
 
 #: The root attribute ``fretwork_format`` of the file: it says the file is fretwork's (an
@@ -170,6 +171,7 @@ def _last_cycle(key: str, name: str, scene, model) -> ModelCycle:
                       scenes.resolved_text(scene))
 
 
+@one_blas_thread
 def constant_cof_comparison(scene_path: str | Path, probes: dict, overrides: dict | None = None) -> Comparison:
     """Both models' last COF cycle, the probes {name: (x, y[, z]) mm} read at their nearest
     contact points (:func:`probe_points`, checked before either run). ``overrides`` {dotted key:

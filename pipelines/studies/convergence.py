@@ -22,6 +22,7 @@ import h5py
 import numpy as np
 
 from reduction.errors import InputError
+from reduction.threads import one_blas_thread
 
 FIGURES = ("stick_area_fraction", "active_slip_area_fraction", "cof_evolved_area_fraction",
            "worn_area_fraction", "max_wear_depth_mm", "clamp_force_loss_fraction", "min_stick_margin",
@@ -167,6 +168,7 @@ def run_level(scene_path: str, size_mm: float, out_dir: str, cache_dir: str | No
     return level
 
 
+@one_blas_thread
 def convergence_study(scene_path, sizes_mm, out_dir, *, cache_dir=None, limit_range_mm=None,
                       tolerance_mm: float = 0.01, grid: int = 7, scheduler=None, workers=None,
                       progress: bool = True, stop_at_loosening: bool = False) -> dict:

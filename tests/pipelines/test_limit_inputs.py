@@ -73,3 +73,25 @@ def test_a_too_wide_tolerance_is_refused_before_earlier_outputs_are_cleared(tmp_
                  "--cache", str(tmp_path), "--out", str(out)]) == 2
     assert "not narrower than the amplitude range" in capsys.readouterr().err
     assert earlier.read_text() == "{}"
+
+
+def test_limit_json_is_strict_json_when_a_run_has_no_finite_figures(tmp_path):
+    """A run that slid off has NaN figures and an unbounded stick margin: limit.json (and the
+    demo's summary.json, written the same way) give them as null, which any JSON reader takes;
+    Python's default wrote NaN and Infinity, which a strict reader refuses."""
+    import json
+    import math
+
+    from pipelines.jobs.limit import AmplitudeRun, LimitResult, write_limit
+
+    runs = [AmplitudeRun(0.1, "stick", {"min_stick_margin": math.inf, "max_wear_depth_mm": 0.0}),
+            AmplitudeRun(0.2, "loosening", {"min_stick_margin": math.nan, "max_wear_depth_mm": 1.5e-3})]
+    result = LimitResult(0.2, (0.1, 0.2), 0.01, runs, (0.1, 0.2))
+
+    def refuse(constant):
+        raise ValueError(f"not JSON: {constant}")
+
+    read = json.loads(write_limit(result, tmp_path / "limit.json").read_text(), parse_constant=refuse)
+    assert [run["min_stick_margin"] for run in read["runs"]] == [None, None]
+    assert [run["max_wear_depth_mm"] for run in read["runs"]] == [0.0, 1.5e-3]
+    assert read["limit_um"] == 200.0
