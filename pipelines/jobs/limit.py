@@ -70,9 +70,29 @@ class LimitResult:
 
     @property
     def margin_limit_mm(self) -> float | None:
-        """What margins divide: the limit, or the top of the range where all was stuck (then the
-        margins are lower bounds)."""
-        return self.limit_mm if self.limit_mm is not None else self.range_mm[1]
+        """What margins divide (mm): the largest amplitude shown to stick, the lower end of the
+        bracket, so that a margin of at least 1 means the wing vibrates no more than an amplitude
+        that stuck. Where every amplitude of the range stuck, the range's top (the margins are then
+        lower bounds); where none did, the range's bottom, the limit (the margins are then upper
+        bounds: no amplitude was shown to stick). See :attr:`margin_bound`."""
+        if self.limit_mm is None:
+            return self.range_mm[1]
+        return self.limit_mm if self.bracket_mm[0] is None else self.bracket_mm[0]
+
+    @property
+    def margin_bound(self) -> str:
+        """How the margins stand to the true ones: "stuck" (divided by an amplitude that stuck),
+        "lower bound" (all of the range stuck) or "upper bound" (none of it did)."""
+        if self.limit_mm is None:
+            return "lower bound"
+        return "upper bound" if self.bracket_mm[0] is None else "stuck"
+
+    @property
+    def speed_rpm(self) -> float | None:
+        """The engine speed the search ran at (rpm), as its runs' summaries state it; None when
+        no run states it."""
+        speeds = {r.figures["engine_speed_rpm"] for r in self.runs if r.figures.get("engine_speed_rpm") is not None}
+        return float(min(speeds)) if speeds else None
 
     def to_json(self) -> dict:
         runs = sorted(self.runs, key=lambda r: r.amplitude_mm)
@@ -80,8 +100,11 @@ class LimitResult:
             "limit_um": _um(self.limit_mm),
             "limit_mm": None if self.limit_mm is None else float(self.limit_mm),
             "bracket_um": [_um(a) for a in self.bracket_mm],
+            "margin_amplitude_um": _um(self.margin_limit_mm),
+            "margin_bound": self.margin_bound,
             "tolerance_um": float(1e3 * self.tolerance_mm),
             "range_um": [_um(a) for a in self.range_mm],
+            "speed_rpm": self.speed_rpm,
             "monotone": self.monotone,
             "changes": [{"below_um": _um(c.below_mm), "above_um": _um(c.above_mm),
                          "verdict_below": c.verdict_below, "verdict_above": c.verdict_above} for c in self.changes],
@@ -277,7 +300,10 @@ def _search(scene_path, low_mm, high_mm, tolerance_mm, grid, overrides, cache_di
 
 
 def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
-    """Clamp-force loss and damaged area versus wing amplitude, verdicts marked, limit drawn."""
+    """Clamp-force loss and damaged area versus wing amplitude, verdicts marked, the bracket of
+    the limit shaded (stuck at its lower end, not at its upper end). Each run is labelled with the
+    real cycles it ran to: the runs end when their verdict is clear, at very different running
+    times, so the curves do not compare amplitudes at equal cycles."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -290,7 +316,8 @@ def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
     loss = np.array([100 * (r.figures.get("clamp_force_loss_fraction") or 0.0) for r in runs])
     damaged = np.array([100 * (r.figures.get("damaged_area_fraction") or 0.0) for r in runs])
     colours = {"stick": "tab:green", "partial_slip": "tab:olive", "damage": "tab:orange", "loosening": "tab:red"}
-    figure, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    figure, axes = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True)
+    low, high = result.bracket_mm
     for ax, values, label in ((axes[0], loss, "clamp-force loss (%)"), (axes[1], damaged, "damaged area (%)")):
         ax.plot(amplitude, values, color="0.6", zorder=1)
         for verdict, colour in colours.items():
@@ -300,17 +327,34 @@ def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
         if failed_early:
             ax.scatter([1e3 * r.amplitude_mm for r in failed_early], [ax.get_ylim()[1]] * len(failed_early),
                        marker="x", color="tab:red", label="slid off / runaway wear / not converged", zorder=2, clip_on=False)
-        if result.limit_mm is not None:
+        if low is not None and high is not None:
+            ax.axvspan(1e3 * low, 1e3 * high, color="0.85", zorder=0,
+                       label=f"limit bracket: stuck at {format_um(low, result.tolerance_mm)} µm, "
+                             f"not at {format_um(high, result.tolerance_mm)} µm")
+        elif result.limit_mm is not None:
             ax.axvline(1e3 * result.limit_mm, color="k", linestyle="--", linewidth=1)
         for change in result.changes if not result.monotone else ():
             if change.verdict_above == SAFE:  # back to stick above the limit
                 ax.axvspan(1e3 * change.below_mm, 1e3 * change.above_mm, color="tab:purple", alpha=0.3)
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
-    axes[0].legend(loc="upper left")
-    axes[0].set_title(f"{title}: {describe_limit(result)}", fontsize=10)
+    for x, y, run in zip(amplitude, loss, runs):
+        cycles = run.figures.get("equivalent_cycles")
+        if cycles is not None:  # upright: neighbouring amplitudes of a refined bracket sit close
+            mantissa, exponent = f"{cycles:.1e}".split("e")
+            axes[0].annotate(f"{mantissa}e{int(exponent)}", (x, y), xytext=(0, 6), textcoords="offset points",
+                             ha="center", va="bottom", rotation=90, fontsize=7, color="0.25")
+    bottom, top = axes[0].get_ylim()
+    axes[0].set_ylim(bottom, top + 0.3 * (top - bottom))  # room for the cycle labels
+    axes[0].legend(loc="upper left", fontsize=8)
+    speed = result.speed_rpm
+    searched = f", searched at {speed:.0f} rpm" if speed is not None else ""
+    axes[0].set_title(f"{title}{searched}: {describe_limit(result)}", fontsize=10)
     axes[1].set_xlabel("wing amplitude (µm)")
-    figure.tight_layout()
+    figure.tight_layout(rect=(0, 0.05, 1, 1))
+    figure.text(0.01, 0.01, "numbers over the points: the real load cycles each run reached. The runs end at very "
+                "different running times,\nso the points are not at equal cycles: clamp-force loss and damaged area "
+                "compare runs of different lengths.", fontsize=7.5, color="0.25", va="bottom")
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=120)
     plt.close(figure)

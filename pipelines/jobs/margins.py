@@ -1,10 +1,16 @@
 """Fretting safety margins across the operating range: speed sweep → wing amplitude → margin.
 
 For each engine speed the multibody model gives the wing amplitude (half the peak-to-peak wing
-torsion of the scene's counterweight); the margin is amplitude limit / wing amplitude, where
-the limit comes from :func:`pipelines.jobs.limit.find_limit` on the coupled scene. A margin below
-1 means the joint does not stay stuck at that speed: it is flagged unsafe (``unsafe_speeds``, red
-in the plot); an amplitude within the limit's tolerance of the limit is "at the limit".
+torsion of the scene's counterweight); the margin is the largest amplitude shown to stick / wing
+amplitude, where that amplitude is the lower end of the bracket of the limit that
+:func:`pipelines.jobs.limit.find_limit` finds on the coupled scene
+(:attr:`pipelines.jobs.limit.LimitResult.margin_limit_mm`). The margins are conservative: a
+margin of at least 1 means the wing vibrates no more than an amplitude that stuck, and an
+amplitude inside the bracket, not shown to stick, has a margin below 1. A margin below 1 is
+flagged unsafe (``unsafe_speeds``, red in the plot); an amplitude within the limit's tolerance
+of the bracket is "at the limit". Where the whole range stuck, the margins divide its top and are
+lower bounds; where nothing stuck, they divide its bottom and are upper bounds, and no speed is
+shown safe: those within the bracket (below its bottom) are "at the limit".
 
 Calibration: when the scene states its wing amplitude (``coupling.wing_amplitude``, e.g. a
 measured one at the scene's engine speed), every sweep amplitude is scaled by the same factor
@@ -18,6 +24,7 @@ clamp force, is then largest, so the one limit is conservative for every speed o
 
 from __future__ import annotations
 
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,7 +32,7 @@ import h5py
 import numpy as np
 
 from pipelines.coupling import CouplingSettings
-from pipelines.jobs.limit import LimitResult, find_limit
+from pipelines.jobs.limit import LimitResult, find_limit, format_um, plot_limit, write_limit
 from reduction.errors import InputError
 from reduction.threads import one_blas_thread
 
@@ -33,7 +40,8 @@ from reduction.threads import one_blas_thread
 @dataclass
 class MarginResult:
     """speeds_rpm (n,); wing_amplitude_mm (n,) after calibration; calibration: the factor on the
-    multibody amplitudes; limit: the amplitude limit; margin (n,) = limit / amplitude.
+    multibody amplitudes; limit: the amplitude limit; margin (n,) = limit.margin_limit_mm /
+    amplitude, the largest amplitude shown to stick over the wing amplitude.
     warnings: why some amplitudes are not to be trusted (a multibody run, of the sweep or of the
     calibration, that had not settled where its amplitude was measured)."""
 
@@ -52,16 +60,21 @@ class MarginResult:
 
     @property
     def unsafe(self) -> np.ndarray:
-        """Speeds whose margin is below 1: the wing vibration exceeds the stick limit (bool, (n,))."""
+        """Speeds whose margin is below 1: the wing vibrates more than the largest amplitude shown
+        to stick (bool, (n,))."""
         return np.isfinite(self.margin) & (self.margin < 1.0)
 
     @property
     def at_limit(self) -> np.ndarray:
-        """Speeds whose wing amplitude lies within the limit's tolerance of the limit: the verdict
-        there is as uncertain as the limit itself (bool, (n,))."""
+        """Speeds whose wing amplitude lies within the limit's tolerance of its bracket (stuck at
+        the lower end, not at the upper): the verdict there is as uncertain as the limit itself
+        (bool, (n,)). Where nothing stuck the bracket reaches down to 0; where everything stuck
+        there is no limit to be at."""
         if self.limit.limit_mm is None:
             return np.zeros(len(self.margin), dtype=bool)
-        return np.abs(self.wing_amplitude_mm - self.limit.limit_mm) <= self.limit.tolerance_mm
+        low = self.limit.bracket_mm[0] or 0.0
+        tolerance = self.limit.tolerance_mm
+        return (self.wing_amplitude_mm >= low - tolerance) & (self.wing_amplitude_mm <= self.limit.limit_mm + tolerance)
 
     def state(self, k: int) -> str:
         """'not judged' (the multibody run failed), 'unsafe', 'at the limit' or 'safe' at the
@@ -79,6 +92,9 @@ class MarginResult:
             "wing_amplitude_um": (1e3 * self.wing_amplitude_mm).tolist(),
             "calibration_factor": self.calibration,
             "limit_um": None if self.limit.limit_mm is None else 1e3 * self.limit.limit_mm,
+            "bracket_um": [None if a is None else 1e3 * a for a in self.limit.bracket_mm],
+            "margin_amplitude_um": 1e3 * self.limit.margin_limit_mm,
+            "margin_bound": self.limit.margin_bound,
             "limit_speed_rpm": self.limit_speed_rpm,
             "margin": [None if not np.isfinite(m) else float(m) for m in self.margin],
             "smallest_margin": None if not np.isfinite(self.margin).any() else float(np.nanmin(self.margin)),
@@ -92,23 +108,48 @@ def _rpm(speeds) -> str:
     return ", ".join(f"{v:.0f}" for v in speeds) + " rpm"
 
 
+def _um(result: MarginResult, amplitude_mm: float) -> str:
+    return format_um(amplitude_mm, result.limit.tolerance_mm)
+
+
+def margin_basis(result: MarginResult) -> str:
+    """What the margins divide, in words: the amplitude (µm), why that one, and the search speed."""
+    limit, searched = result.limit, f"searched at {result.limit_speed_rpm:.0f} rpm"
+    if limit.margin_bound == "lower bound":
+        return (f"stuck over the whole searched range, up to {_um(result, limit.margin_limit_mm)} µm ({searched}): "
+                "the margins are lower bounds")
+    if limit.margin_bound == "upper bound":
+        return (f"not stuck even at {_um(result, limit.margin_limit_mm)} µm, the bottom of the searched range "
+                f"({searched}): the margins are upper bounds")
+    return f"sticks up to {_um(result, limit.bracket_mm[0])} µm (not at {_um(result, limit.limit_mm)} µm), {searched}"
+
+
 def describe_margins(result: MarginResult) -> str:
-    """One line: the unsafe speeds (margin below 1) and those at the limit, or that all are safe."""
+    """One line: the unsafe speeds (margin below 1) and those at the limit, or that all are safe;
+    margins that are bounds are said to be."""
     unsafe, at_limit = result.speeds_rpm[result.unsafe], result.speeds_rpm[result.at_limit & ~result.unsafe]
     failed = result.speeds_rpm[result.failed]
+    bound = result.limit.margin_bound
+    stuck = f"{_um(result, result.limit.margin_limit_mm)} µm"
     parts = []
     if failed.size:
         parts.append(f"NOT JUDGED at {_rpm(failed)}: the multibody run failed there (the sweep's failures), "
                      "so there is no wing amplitude to judge")
     if unsafe.size:
-        parts.append(f"UNSAFE at {_rpm(unsafe)}: the wing vibration exceeds the stick limit (margin below 1)")
+        exceeded = {"stuck": f"{stuck}, the largest amplitude shown to stick",
+                    "lower bound": f"{stuck}, the top of the searched range, all of which stuck",
+                    "upper bound": f"{stuck}, the bottom of the searched range, which did not stick"}[bound]
+        parts.append(f"UNSAFE at {_rpm(unsafe)}: the wing vibration exceeds {exceeded} (margin below 1)")
     if at_limit.size:
-        parts.append(f"at the limit at {_rpm(at_limit)} (within the limit's tolerance)")
+        parts.append(f"not shown safe at {_rpm(at_limit)}: nothing in the searched range stuck" if bound == "upper bound"
+                     else f"at the limit at {_rpm(at_limit)} (within the limit's tolerance of its bracket)")
     if not parts:
         said = "safe at every speed (every margin at least 1)"
     else:
         said = "; ".join(parts) + ("; safe at the others" if failed.size and not (unsafe.size or at_limit.size)
                                    and failed.size < len(result.speeds_rpm) else "")
+    if bound != "stuck":
+        said += f"; the margins are {bound}s ({'the whole range stuck' if bound == 'lower bound' else 'nothing stuck'})"
     if result.warnings:
         said += f"; WARNING, {len(result.warnings)} amplitude(s) not to be trusted: " + " | ".join(result.warnings)
     return said
@@ -131,7 +172,8 @@ def calibration_factor(scene, cache) -> tuple[float, str | None]:
 @one_blas_thread
 def margin_sweep(scene_path, speeds, *, amplitude_range_mm, tolerance_mm, cache_dir=None, sweep_path=None,
                  out_dir=None, scheduler=None, workers=None, progress=True, overrides=None):
-    """Speed sweep, amplitude limit and margins (module doc); returns (MarginResult, SweepResult)."""
+    """Speed sweep, amplitude limit and margins (module doc); returns (MarginResult, SweepResult).
+    out_dir: the folder of the limit's runs, where its limit.json and limit.png go too."""
     from pipelines.jobs.sweep import speed_sweep
     from pipelines import scene as scenes
     from pipelines.coupling import multibody_params
@@ -147,6 +189,9 @@ def margin_sweep(scene_path, speeds, *, amplitude_range_mm, tolerance_mm, cache_
     limit_overrides = dict(overrides or {}, **{"mbs.speed_rpm": float(speeds.max())})
     limit = find_limit(scene_path, *amplitude_range_mm, tolerance_mm=tolerance_mm, overrides=limit_overrides,
                        cache_dir=cache_dir, out_dir=out_dir, scheduler=scheduler, workers=workers, progress=progress)
+    if out_dir is not None:  # beside the limit's runs, as `fretwork limit` and the demo write them
+        write_limit(limit, Path(out_dir) / "limit.json")
+        plot_limit(limit, Path(out_dir) / "limit.png", scene.name)
     result = margins_of(scene, sweep, limit, cache)
     if sweep_path is not None:
         write_margins(sweep_path, result)
@@ -154,8 +199,9 @@ def margin_sweep(scene_path, speeds, *, amplitude_range_mm, tolerance_mm, cache_
 
 
 def margins_of(scene, sweep, limit: LimitResult, cache) -> MarginResult:
-    """Calibrated wing amplitude of the scene's CW per sweep speed and margin = limit / amplitude
-    (the limit searched at the highest sweep speed)."""
+    """Calibrated wing amplitude of the scene's CW per sweep speed and margin = the largest
+    amplitude shown to stick / amplitude (:attr:`LimitResult.margin_limit_mm`, the limit searched
+    at the highest sweep speed)."""
     counterweight = CouplingSettings.of(scene).counterweight - 1
     factor, calibration_warning = calibration_factor(scene, cache)
     amplitude = factor * sweep.wing_amplitude[:, counterweight]
@@ -174,7 +220,8 @@ def write_margins(path, result: MarginResult) -> None:
         if "margins" in handle:
             del handle["margins"]
         group = handle.create_group("margins")
-        group.attrs["description"] = "fretting safety margin = amplitude limit / wing amplitude per engine speed"
+        group.attrs["description"] = ("fretting safety margin = margin_amplitude_mm (the largest amplitude shown to "
+                                      "stick) / wing amplitude per engine speed")
         group.attrs["calibration_factor"] = result.calibration
         group.attrs["limit_speed_rpm"] = result.limit_speed_rpm
         for name, data, units in (("speed_rpm", result.speeds_rpm, "rpm"),
@@ -184,6 +231,8 @@ def write_margins(path, result: MarginResult) -> None:
             group.create_dataset(name, data=data).attrs["units"] = units
         group["unsafe"].attrs["description"] = "1 where the margin is below 1, else 0"
         group.attrs["limit_mm"] = np.nan if result.limit.limit_mm is None else result.limit.limit_mm
+        group.attrs["margin_amplitude_mm"] = result.limit.margin_limit_mm
+        group.attrs["margin_bound"] = result.limit.margin_bound
 
 
 def plot_margins(result: MarginResult, path: Path, title: str) -> Path:
@@ -195,17 +244,15 @@ def plot_margins(result: MarginResult, path: Path, title: str) -> Path:
 
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
     top.plot(result.speeds_rpm, 1e3 * result.wing_amplitude_mm, "-", color="0.6", label="wing amplitude")
-    searched = f"searched at {result.limit_speed_rpm:.0f} rpm"
-    if result.limit.limit_mm is not None:
-        top.axhline(1e3 * result.limit.limit_mm, color="tab:red", linestyle="--",
-                    label=f"stick limit {1e3 * result.limit.limit_mm:.0f} µm ({searched})")
-    else:  # every amplitude of the range stuck: the margins are lower bounds, divided by its top
-        top.axhline(1e3 * result.limit.margin_limit_mm, color="tab:red", linestyle=":",
-                    label=f"stick limit above {1e3 * result.limit.margin_limit_mm:.0f} µm, the searched range ({searched})")
+    limit = result.limit
+    top.axhline(1e3 * limit.margin_limit_mm, color="tab:red", linestyle="--" if limit.margin_bound == "stuck" else ":",
+                label=textwrap.fill(margin_basis(result), 60))
+    if limit.margin_bound == "stuck":  # not shown to stick inside the bracket
+        top.axhspan(1e3 * limit.bracket_mm[0], 1e3 * limit.limit_mm, color="tab:red", alpha=0.12, lw=0)
     top.set_ylabel("wing amplitude (µm)")
     low, high = top.get_ylim()
     top.set_ylim(low, high + 0.25 * (high - low))  # room for the legend above the limit line
-    top.legend(loc="upper right")
+    top.legend(loc="upper right", fontsize=8)
     top.grid(True, alpha=0.3)
     bottom.plot(result.speeds_rpm, result.margin, "-", color="0.6", zorder=1)
     colours = {"safe": "tab:green", "at the limit": "tab:orange", "unsafe": "tab:red"}
@@ -213,7 +260,8 @@ def plot_margins(result: MarginResult, path: Path, title: str) -> Path:
     for state, colour in colours.items():
         chosen = states == state
         if chosen.any():
-            label = "unsafe: margin < 1" if state == "unsafe" else state
+            label = {"unsafe": "unsafe: margin < 1", "at the limit": "not shown safe (upper bound)"
+                     if limit.margin_bound == "upper bound" else "at the limit"}.get(state, state)
             bottom.scatter(result.speeds_rpm[chosen], result.margin[chosen], color=colour, label=label, zorder=2)
             top.scatter(result.speeds_rpm[chosen], 1e3 * result.wing_amplitude_mm[chosen], color=colour, zorder=3)
     for k, speed in enumerate(result.speeds_rpm[result.failed]):  # no amplitude to draw: the speed is marked
@@ -222,7 +270,7 @@ def plot_margins(result: MarginResult, path: Path, title: str) -> Path:
                          label="multibody run failed: not judged" if k == 0 and axis is bottom else None)
     bottom.axhline(1.0, color="tab:red", linewidth=1)
     bottom.legend(loc="best")
-    bottom.set_ylabel("safety margin (limit / amplitude)")
+    bottom.set_ylabel("safety margin\n(stuck amplitude / wing amplitude)")
     bottom.set_xlabel("engine speed (rpm)")
     bottom.grid(True, alpha=0.3)
     top.set_title(title)

@@ -278,7 +278,8 @@ def test_stage_cache_survives_a_broken_entry(tmp_path):
 
 def test_sweep_margins_are_limit_over_calibrated_amplitude(tmp_path, monkeypatch, capsys):
     """`fretwork sweep --margins`: the wing amplitude at the scene's speed is the stated one
-    (calibration), margin = limit / amplitude at every speed, /margins in the sweep file."""
+    (calibration), margin = the largest amplitude shown to stick (the bracket's lower end) / amplitude
+    at every speed, /margins in the sweep file, the limit's limit.json and limit.png beside its runs."""
     import h5py
 
     monkeypatch.setattr(limits, "run_amplitude", _fake_run)
@@ -293,11 +294,16 @@ def test_sweep_margins_are_limit_over_calibrated_amplitude(tmp_path, monkeypatch
     amplitude = dict(zip(summary["speeds_rpm"], summary["wing_amplitude_um"]))
     assert amplitude[750.0] == pytest.approx(100.0, rel=1e-9)
     assert summary["limit_um"] == pytest.approx(263.7, abs=5.0)
+    stuck = summary["bracket_um"][0]  # the largest amplitude shown to stick: what the margins divide
+    assert stuck < 263.7 <= summary["limit_um"] and summary["margin_amplitude_um"] == stuck
     for a, m in zip(summary["wing_amplitude_um"], summary["margin"]):
-        assert m == pytest.approx(summary["limit_um"] / a, rel=1e-9)
+        assert m == pytest.approx(stuck / a, rel=1e-9)
     with h5py.File(out) as results:
         assert results["margins/margin"].attrs["units"] == "1"
         assert np.allclose(results["margins/margin"][()], summary["margin"])
+    written = json.loads((tmp_path / "limit_runs" / "limit.json").read_text())
+    assert written["bracket_um"] == summary["bracket_um"] and written["margin_amplitude_um"] == stuck
+    assert (tmp_path / "limit_runs" / "limit.png").stat().st_size > 0
 
 
 def test_a_repeated_amplitude_run_is_read_from_the_cache(tmp_path):

@@ -23,7 +23,7 @@ def result(monkeypatch):
 
 
 def test_a_failed_speed_has_no_margin_and_is_not_judged(result):
-    np.testing.assert_allclose(result.margin[[0, 2]], [0.2 / 0.3, 0.2 / 0.1])
+    np.testing.assert_allclose(result.margin[[0, 2]], [0.19 / 0.3, 0.19 / 0.1])  # 0.19 mm stuck, 0.2 not
     assert np.isnan(result.margin[1])
     assert [result.state(k) for k in range(3)] == ["unsafe", "not judged", "safe"]
     assert not result.unsafe[1] and not result.at_limit[1]

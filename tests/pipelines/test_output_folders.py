@@ -329,17 +329,25 @@ def test_the_shipped_scenes_raise_no_plausibility_warning(name):
 
 
 def test_margins_below_one_are_unsafe_and_those_within_the_tolerance_at_the_limit():
+    """Bracket (0.24 stuck, 0.25 not), tolerance 0.01 mm: the margins divide 0.24 mm, the largest
+    amplitude shown to stick. 0.1 mm: 2.4, safe; 0.235 mm: 1.02 but within the tolerance of the
+    bracket, at the limit; 0.245 mm, inside the bracket, not shown to stick: 0.98, unsafe; 0.3 mm
+    unsafe."""
     from pipelines.jobs.limit import LimitResult
     from pipelines.jobs.margins import MarginResult, describe_margins
 
     limit = LimitResult(0.25, (0.24, 0.25), 0.01, range_mm=(0.1, 0.4))
-    amplitude = np.array([0.1, 0.245, 0.3])
-    result = MarginResult(np.array([600.0, 750.0, 900.0]), amplitude, 1.0, limit, 0.25 / amplitude, 900.0)
+    amplitude = np.array([0.1, 0.235, 0.245, 0.3])
+    result = MarginResult(np.array([600.0, 750.0, 800.0, 900.0]), amplitude, 1.0, limit,
+                          limit.margin_limit_mm / amplitude, 900.0)
+    assert limit.margin_limit_mm == 0.24
     summary = result.to_json()
-    assert summary["unsafe_speeds"] == [900.0] and summary["at_limit_speeds"] == [750.0]
-    assert [result.state(k) for k in range(3)] == ["safe", "at the limit", "unsafe"]
-    assert describe_margins(result) == ("UNSAFE at 900 rpm: the wing vibration exceeds the stick limit (margin below 1); "
-                                        "at the limit at 750 rpm (within the limit's tolerance)")
+    assert summary["unsafe_speeds"] == [800.0, 900.0] and summary["at_limit_speeds"] == [750.0, 800.0]
+    assert summary["margin_amplitude_um"] == pytest.approx(240.0) and summary["limit_um"] == pytest.approx(250.0)
+    assert [result.state(k) for k in range(4)] == ["safe", "at the limit", "unsafe", "unsafe"]
+    assert describe_margins(result) == ("UNSAFE at 800, 900 rpm: the wing vibration exceeds 240.0 µm, the largest "
+                                        "amplitude shown to stick (margin below 1); at the limit at 750 rpm (within "
+                                        "the limit's tolerance of its bracket)")
 
 
 def test_a_run_that_ends_early_ends_its_progress_bar_full_with_the_reason(capsys):
