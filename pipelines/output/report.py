@@ -1,10 +1,17 @@
 """``fretwork report``: one self-contained HTML page of a run's or a job's folder.
 
-The page gathers what the folder holds: the verdict and the key figures of every results
-file (``results.h5``), the summaries and margins of a job (``summary.json``, ``limit.json``,
-margins in ``sweep.h5``), every plot (PNG files, inlined as base64 so the page is one file to
-mail or archive), the scene each run was made from, and the versions of fretwork and its main
-dependencies. Nothing is recomputed. Units are those of the files: mm, N, MPa, mJ.
+The page answers first, then supports. A job's folder (``fretwork demo``, ``fretwork sweep
+--margins``, ``fretwork limit``) opens with the job's verdict in one sentence, the amplitude
+limit with its bracket and the speed it was searched at, and the margin at every speed
+(``summary.json``, ``limit.json``, ``/margins`` of ``sweep.h5``); then the job's own run (the
+operating point), with its figures and plots; then the runs of the amplitude search, one row
+each. A run's folder shows its verdict, its operating point (wing amplitude, speed, load cycle,
+engine hours: ``/histories`` of ``results.h5``) and its figures; a multibody run's folder
+(``fretwork mbs``, ``run.h5``) its speed, wing amplitudes, torsion mode and steadiness. Plots
+(PNG) are inlined as base64, so the page is one file to mail or archive; the versions of
+fretwork and its main dependencies close it. Nothing is recomputed but what the CLI prints from
+the same files. Units: mm, N, MPa, mJ in the files; the page shows µm, kN and hours where an
+engineer reads them, labelled.
 """
 
 from __future__ import annotations
@@ -12,6 +19,9 @@ from __future__ import annotations
 import base64
 import html
 import json
+import re
+import tomllib
+from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
 
@@ -23,65 +33,161 @@ from pipelines.output.locks import REPORT_TITLE
 from reduction.errors import InputError
 
 PACKAGES = ("fretwork", "numpy", "scipy", "scikit-fem", "exudyn", "h5py", "matplotlib", "meshio", "fmpy")
-KEY_FIGURES = (
-    ("verdict", "verdict", None), ("stationary", "stationary", None),
-    ("cycles_run", "simulated cycles", None), ("equivalent_cycles", "real cycles", None),
-    ("stick_area_fraction", "stick area", "%"), ("slip_area_fraction", "at the friction limit", "%"),
-    ("damaged_area_fraction", "at μ_max (damaged) area", "%"), ("active_slip_area_fraction", "still sliding (verdict)", "%"),
-    ("cof_evolved_area_fraction", "COF evolved area", "%"), ("min_stick_margin", "smallest stick margin of stuck points, 1 − max |τ|/p / μ_max", None),
-    ("max_wear_depth_mm", "max wear depth [mm]", None), ("wear_volume_mm3", "wear volume [mm³]", None),
-    ("dissipated_energy_mJ", "dissipated energy, simulated cycles [mJ]", None),
-    ("bolt_force_initial_N", "clamp force initial [N]", None), ("bolt_force_final_N", "clamp force final [N]", None),
-    ("clamp_force_loss_fraction", "clamp force loss", "%"),
-    ("fdp_max_MPa_mm", "FDP max τ·δ [MPa·mm]", None), ("fdp_max_location_mm", "FDP max at [mm]", None),
-    ("ffdp_max_MPa2_mm", "FFDP max σ_t·τ·δ [MPa²·mm]", None), ("ffdp_max_location_mm", "FFDP max at [mm]", None),
-    ("wing_amplitude_mm", "wing amplitude [mm]", None), ("engine_speed_rpm", "engine speed [rpm]", None),
-)
+#: the folder a limit search writes each amplitude's run into (pipelines.jobs.limit.run_amplitude)
+AMPLITUDE_FOLDER = re.compile(r"amplitude_[0-9.]+um")
+#: the endings of a run that stopped and still answer the search: not stuck (pipelines.jobs.limit.STOPPED)
+STOPPED_NOT_STUCK = ("slid_off", "wear_runaway")
+#: Area fractions are sums of point areas over the nominal area: a whole area can sum to 1 + 2e-16.
+ROUNDING = 1e-9
+AREAS_NOTE = ("Areas are fractions of the contact area closed after the preload. Above 100 %: points beyond "
+              "it came into contact, as wear widened the contact or the contact patch moved.")
 STYLE = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}
 table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:.2em .6em;text-align:left}
-.verdict{font-size:1.4em;font-weight:bold}.unsafe{color:#b00;font-weight:bold}
+.verdict{font-size:1.4em;font-weight:bold}.unsafe{color:#b00;font-weight:bold}.note{font-size:.9em;color:#555}
+.support{font-size:.9em}h3{font-size:1em}
 img{max-width:100%;border:1px solid #ddd;margin:.5em 0}pre{background:#f6f6f6;padding:.8em;overflow:auto}
 figure{margin:1em 0}figcaption{font-size:.9em;color:#555}"""
 
 
-def _value(value, unit) -> str:
-    if value is None or (isinstance(value, float) and not np.isfinite(value)):
+# ----------------------------------------------------------------------------------------- numbers
+
+def _finite(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and bool(np.isfinite(value))
+
+
+def _number(value, digits: int = 4) -> str:
+    """A figure with ``digits`` significant digits, written without an exponent from 0.001 to 10⁶
+    (a count of 524 347 cycles reads better than 5.243e+05)."""
+    if not _finite(value):
         return "–"
-    if unit == "%":
-        return f"{100 * value:.1f} %"
-    if isinstance(value, (list, tuple)):
-        return "(" + ", ".join(f"{v:.4g}" for v in value) + ")"
-    if isinstance(value, float):
-        return f"{value:.4g}"
-    return html.escape(str(value))
+    if value == 0:
+        return "0"
+    magnitude = int(np.floor(np.log10(abs(value))))
+    if not -3 <= magnitude < 6:
+        return f"{value:.{digits - 1}e}"
+    text = f"{value:.{max(digits - 1 - magnitude, 0)}f}"
+    return text.rstrip("0").rstrip(".") if "." in text else text
+
+
+def _percent(fraction, decimals: int = 1) -> str:
+    return f"{100 * fraction:.{decimals}f} %" if _finite(fraction) else "–"
+
+
+def _kilonewtons(force_n) -> str:
+    return f"{_number(force_n / 1e3)} kN" if _finite(force_n) else "–"
+
+
+def _cycles(count) -> str:
+    """A number of load cycles: whole cycles, thousands apart."""
+    return f"{count:,.0f}".replace(",", " ") if _finite(count) else "–"
+
+
+def _plural(count) -> str:
+    return "" if count == 1 else "s"
+
+
+def _duration(hours) -> str:
+    """Engine running time, given in hours, in the unit that reads: h, min or s."""
+    if not _finite(hours):
+        return "–"
+    if hours >= 1.0:
+        return f"{_number(hours, 3)} h"
+    return f"{_number(60 * hours, 3)} min" if hours >= 1 / 60 else f"{_number(3600 * hours, 3)} s"
+
+
+def _um(amplitude_mm, tolerance_mm=None) -> str:
+    from pipelines.jobs.limit import format_um
+
+    return f"{format_um(amplitude_mm, tolerance_mm)} µm"
+
+
+def _rpm(speeds) -> str:
+    return ", ".join(f"{v:.0f}" for v in speeds) + " rpm"
 
 
 def _table(rows) -> str:
     return "<table>" + "".join(f"<tr><th>{html.escape(k)}</th><td>{v}</td></tr>" for k, v in rows) + "</table>"
 
 
-def _run_section(path: Path, root: Path) -> str:
+def _grid(header, rows, css: str = "") -> str:
+    """A table with a header row; ``rows`` of cell texts (HTML)."""
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
+    return f"<table{f' class={css}' if css else ''}><tr>{head}</tr>{body}</table>"
+
+
+def _relative(path: Path, root: Path) -> str:
+    return html.escape(str(path.relative_to(root)))
+
+
+# -------------------------------------------------------------------------------------- contact runs
+
+@dataclass
+class Run:
+    """A contact run's results file, read once. summary: its verdict, stationarity and figures
+    with the operating point of a coupled run merged in (wing_amplitude_mm, engine_speed_rpm,
+    load_cycle, load_cycle_frequency_hz, and the engine hours of pipelines.jobs.run); None when the
+    run stopped without one (``stopped`` says why, ``message`` what failed)."""
+
+    path: Path
+    name: str
+    scene: str
+    summary: dict | None
+    stopped: str = ""
+    ending: str = ""
+    message: str = ""
+    effects: tuple = ()
+    context: dict = field(default_factory=dict)
+
+    @property
+    def folder(self) -> Path:
+        return self.path.parent
+
+    @property
+    def amplitude_mm(self) -> float | None:
+        """The wing amplitude run (mm): the coupled run's own, else its search folder's name."""
+        if "wing_amplitude_mm" in self.context:
+            return self.context["wing_amplitude_mm"]
+        return _folder_amplitude_mm(self.folder) if AMPLITUDE_FOLDER.fullmatch(self.folder.name) else None
+
+
+def _context(file: h5py.File) -> dict:
+    """The operating point of a coupled run: ``/histories`` holds the multibody histories that
+    drove it and the load cycle they were played in (pipelines.output.results)."""
+    if "histories" not in file:
+        return {}
+    attrs = file["histories"].attrs
+    names = {"wing_amplitude": "wing_amplitude_mm", "speed_rpm": "engine_speed_rpm", "load_cycle": "load_cycle",
+             "load_cycle_frequency_hz": "load_cycle_frequency_hz"}
+    return {ours: (str(attrs[theirs]) if theirs == "load_cycle" else float(attrs[theirs]))
+            for theirs, ours in names.items() if theirs in attrs}
+
+
+def _effects(scene_toml: str) -> tuple:
+    try:
+        return tuple(tomllib.loads(scene_toml).get("scene", {}).get("effects", ()))
+    except tomllib.TOMLDecodeError:
+        return ()
+
+
+def read_run(path: Path) -> Run | None:
+    """The contact run of a results file, or None for another fretwork file of that name."""
+    from pipelines.jobs.run import _engine_hours
+
     with h5py.File(path, "r") as file:
         attrs = file.attrs
-        if attrs.get("fretwork_format") != "fretwork-results":
-            return ""
+        if attrs.get("fretwork_format") != "fretwork-results" or "model" in file:  # "model": a multibody run
+            return None
         name, scene = str(attrs.get("scene_name", "")), str(attrs.get("scene_toml", ""))
+        context = _context(file)
         if "summary" not in file:
-            message = str(file.attrs.get("ending_message", ""))  # why the increment that ended it failed
-            return (f"<h2>Run {html.escape(name)} ({html.escape(str(path.relative_to(root)))})</h2>"
-                    f"<p class='unsafe'>{html.escape(_no_summary(file))}</p>"
-                    + (f"<p>why: {html.escape(message)}</p>" if message else "")
-                    + (f"<details><summary>scene</summary><pre>{html.escape(scene)}</pre></details>" if scene else ""))
-        summary = {"verdict": file["summary"].attrs["verdict"], "stationary": bool(file["summary"].attrs["stationary"]),
-                   **json.loads(file["summary"].attrs["figures"])}
-    verdict = str(summary["verdict"])
-    rows = [(label, _value(summary[key], unit)) for key, label, unit in KEY_FIGURES if key in summary]
-    parts = [f"<h2>Run {html.escape(name)} ({html.escape(str(path.relative_to(root)))})</h2>",
-             f"<p class='verdict'>verdict: {html.escape(verdict.upper())}</p>",
-             f"<p>{html.escape(VERDICT_MEANINGS.get(verdict, ''))}</p>", _table(rows)]
-    if scene:
-        parts.append(f"<details><summary>scene</summary><pre>{html.escape(scene)}</pre></details>")
-    return "\n".join(parts)
+            return Run(path, name, scene, None, _no_summary(file), str(attrs.get("ending", "")),
+                       str(attrs.get("ending_message", "")), _effects(scene), context)
+        summary = {"verdict": str(file["summary"].attrs["verdict"]),
+                   "stationary": bool(file["summary"].attrs["stationary"]),
+                   **json.loads(file["summary"].attrs["figures"]), **context}
+    summary.update(_engine_hours(summary))
+    return Run(path, name, scene, summary, effects=_effects(scene), context=context)
 
 
 def _no_summary(file: h5py.File) -> str:
@@ -98,38 +204,437 @@ def _no_summary(file: h5py.File) -> str:
     return f"incomplete results file: the run did not end (no ending recorded, {cycles} cycles), no summary"
 
 
-def _job_section(path: Path, root: Path) -> str:
-    data = json.loads(path.read_text())
-    summary = data.get("summary", data)
-    if not isinstance(summary, dict):
-        return ""
+def _has_bolts(s: dict) -> bool:
+    return s.get("bolt_force_initial_N") is not None
+
+
+def _cof_evolved(s: dict) -> bool:
+    return (s.get("cof_evolved_area_fraction") or 0.0) > 0.0
+
+
+def meaning(s: dict) -> str:
+    """What the verdict says about this run, without claims that do not apply to it: no clause on
+    an evolved COF where none evolved, none on the clamp force of a joint without bolts
+    (:data:`contact.verdict.VERDICT_MEANINGS` states each verdict in general)."""
+    verdict, clamp = s["verdict"], "; clamp force stable" if _has_bolts(s) else ""
+    if verdict == "partial_slip":
+        return ("a stick zone holds" + (" and the clamp force is stable" if _has_bolts(s) else "")
+                + ", but the contact edges keep sliding at a COF that never had to rise: fretting at the edges, "
+                  "no friction-driven surface damage; judge crack risk by FFDP")
+    if verdict == "damage":
+        whole = (s.get("stick_area_fraction") or 0.0) <= ROUNDING
+        if _cof_evolved(s):
+            how = ("points keep sliding after their COF rose there, at μ_max or still rising towards it when the "
+                   "run ended" + (" (the whole contact slides)" if whole else ""))
+        else:
+            how = "the whole contact keeps sliding (gross slip), no stick zone holds" if whole else \
+                "points keep sliding"
+        return f"{how}: fretting scars expected{clamp}"
+    return VERDICT_MEANINGS.get(verdict, "")
+
+
+def _operating_rows(s: dict) -> list:
     rows = []
-    for key, value in summary.items():
-        if isinstance(value, dict) or (isinstance(value, list) and any(isinstance(v, (dict, list)) for v in value)):
-            continue  # tables of their own (a limit search's runs and changes)
-        text = _value(value, None)
-        if key in ("smallest_margin", "margin_at_operating_point") and isinstance(value, (int, float)) and value < 1:
-            text = f"<span class='unsafe'>{text} (below 1: NOT SAFE)</span>"
-        rows.append((key, text))
-    return f"<h2>{html.escape(str(path.relative_to(root)))}</h2>" + _table(rows)
+    if "wing_amplitude_mm" in s:
+        cycle = str(s.get("load_cycle", "")).replace("_", " ")
+        rows.append(("operating point", f"wing amplitude {_number(1e3 * s['wing_amplitude_mm'], 3)} µm at "
+                                        f"{s['engine_speed_rpm']:.0f} rpm"))
+        if "load_cycle_frequency_hz" in s:
+            rows.append(("one load cycle", f"{html.escape(cycle)} ({s['load_cycle_frequency_hz']:.0f} Hz)"))
+    hours = s.get("equivalent_engine_hours")
+    rows.append(("load cycles", f"{s['cycles_run']} simulated, standing for {_cycles(s['equivalent_cycles'])} real "
+                                "cycles" + (f" = {_duration(hours)} of engine running" if hours is not None else "")))
+    for key, what in (("shakedown_at", "shakedown"), ("loosening_evident_at", "loosening evident")):
+        if s.get(f"{key}_cycles") is not None:
+            when = s.get(f"{key}_engine_hours")
+            rows.append((what, f"after {_cycles(s[key + '_cycles'])} real cycle{_plural(s[key + '_cycles'])}"
+                               + (f" ({_duration(when)})" if when is not None else "")))
+    life = s.get("life_cycles")
+    if life is not None and s.get("shakedown_at_cycles") is None and s["verdict"] != "loosening" \
+            and s["equivalent_cycles"] < (1.0 - 1e-9) * life:
+        rows.append(("NOTE", f"the run ended at its wear_cycles budget, {_percent(s['equivalent_cycles'] / life)} of "
+                             f"its life ({_cycles(life)} cycles): the verdict covers that running time only"))
+    return rows
 
 
-def _margins_section(path: Path, root: Path) -> str:
+def _area_rows(s: dict, effects: tuple) -> list:
+    rows = [("stick", _percent(s["stick_area_fraction"])),
+            ("at the friction limit (slip)", _percent(s["slip_area_fraction"])),
+            ("of it at μ_max (damaged)", _percent(s["damaged_area_fraction"])),
+            ("still sliding (the verdict's measure)", _percent(s.get("active_slip_area_fraction",
+                                                                      s["slip_area_fraction"])))]
+    if "cof_evolution" in effects or _cof_evolved(s):
+        rows.append(("COF evolved", _percent(s["cof_evolved_area_fraction"])))
+    return [(f"area {label}", text) for label, text in rows]
+
+
+def _figure_rows(s: dict, effects: tuple) -> list:
+    rows = []
+    if s.get("min_stick_margin") is not None:
+        rows.append(("smallest stick margin of stuck points, 1 − max |τ|/p / μ_max",
+                     _number(s["min_stick_margin"], 3)))
+    if "wear" in effects or (s.get("max_wear_depth_mm") or 0.0) > 0:
+        rows += [("max wear depth", f"{_number(1e3 * s['max_wear_depth_mm'], 3)} µm"),
+                 ("wear volume", f"{_number(s['wear_volume_mm3'], 3)} mm³")]
+    rows.append(("dissipated energy, simulated cycles", f"{_number(s['dissipated_energy_mJ'])} mJ"))
+    if _has_bolts(s):
+        rows.append(("clamp force", f"{_kilonewtons(s['bolt_force_initial_N'])} → "
+                                    f"{_kilonewtons(s['bolt_force_final_N'])} "
+                                    f"({_percent(s['clamp_force_loss_fraction'], 2)} loss)"))
+    for key, label, unit in (("fdp", "FDP max τ·δ", "MPa·mm"), ("ffdp", "FFDP max σ_t·τ·δ", "MPa²·mm")):
+        value = s.get(f"{key}_max_{unit.replace('²', '2').replace('·', '_')}")
+        if value is None:
+            continue
+        where = s.get(f"{key}_max_location_mm")
+        at = f" at ({', '.join(_number(v, 4) for v in where)}) mm" if value != 0 and where is not None else ""
+        rows.append((label, f"{_number(value)} {unit}{at}"))
+    return rows
+
+
+def _run_heading(run: Run, root: Path, title: str) -> str:
+    return f"<h2>{html.escape(title)} {html.escape(run.name)} ({_relative(run.path, root)})</h2>"
+
+
+def _scene_block(scene: str, caption: str = "scene") -> str:
+    if not scene:
+        return ""
+    return f"<details><summary>{html.escape(caption)}</summary><pre>{html.escape(scene)}</pre></details>"
+
+
+def _run_section(run: Run, root: Path, title: str = "Run") -> str:
+    if run.summary is None:
+        return "\n".join([_run_heading(run, root, title), f"<p class='unsafe'>{html.escape(run.stopped)}</p>",
+                          f"<p>why: {html.escape(run.message)}</p>" if run.message else "", _scene_block(run.scene)])
+    s = run.summary
+    verdict = str(s["verdict"])
+    stationary = "" if s["stationary"] else " (not yet stationary)"
+    rows = _operating_rows(s) + _area_rows(s, run.effects) + _figure_rows(s, run.effects)
+    areas = [s.get(k) for k in ("stick_area_fraction", "slip_area_fraction", "active_slip_area_fraction",
+                                "cof_evolved_area_fraction")]
+    widened = max((a for a in areas if _finite(a)), default=0.0) > 1.0 + ROUNDING
+    note = AREAS_NOTE if widened else AREAS_NOTE.split(" Above")[0]
+    return "\n".join([_run_heading(run, root, title),
+                      f"<p class='verdict'>verdict: {html.escape(verdict.upper())}{stationary}</p>",
+                      f"<p>{html.escape(meaning(s))}</p>", _table(rows), f"<p class='note'>{html.escape(note)}</p>",
+                      _scene_block(run.scene)])
+
+
+# --------------------------------------------------------------------------------- amplitude search
+
+@dataclass
+class Search:
+    """An amplitude-limit search: its runs (one folder each) and what its job recorded
+    (limit.json of ``fretwork limit`` and the demo; a sweep's /margins holds the limit alone)."""
+
+    folder: Path
+    runs: list
+    unfinished: list
+    record: dict | None = None
+
+    @property
+    def speed_rpm(self) -> float | None:
+        speeds = {r.context.get("engine_speed_rpm") for r in self.runs} - {None}
+        return speeds.pop() if len(speeds) == 1 else None
+
+    def verdicts(self) -> list:
+        """(amplitude mm, verdict or None) of every run, unfinished ones too, in amplitude order."""
+        return sorted([(r.amplitude_mm, r.summary["verdict"] if r.summary else None)
+                       for r in self.runs if r.amplitude_mm is not None]
+                      + [(_folder_amplitude_mm(p.parent), None) for p in self.unfinished])
+
+
+def _limit_facts(search: Search | None, limit_mm: float | None) -> dict:
+    """The limit, its bracket, range, tolerance and monotony: from the job's limit.json, else
+    read off the search's runs (a run without a verdict stopped: not stuck)."""
+    if search is not None and search.record:
+        r = search.record
+        mm = (lambda um: None if um is None else 1e-3 * um)
+        return {"limit_mm": r.get("limit_mm"), "stuck_mm": mm((r.get("bracket_um") or [None])[0]),
+                "range_mm": [mm(v) for v in r.get("range_um") or (None, None)],
+                "tolerance_mm": mm(r.get("tolerance_um")), "monotone": r.get("monotone", True)}
+    facts = {"limit_mm": limit_mm, "stuck_mm": None, "range_mm": (None, None), "tolerance_mm": None, "monotone": True}
+    runs = search.verdicts() if search is not None else []
+    if runs:
+        facts["range_mm"] = (runs[0][0], runs[-1][0])
+        if limit_mm is not None:
+            facts["stuck_mm"] = max((a for a, v in runs if v == "stick" and a < limit_mm), default=None)
+            facts["monotone"] = not any(v == "stick" and a > limit_mm for a, v in runs)
+    return facts
+
+
+def _limit_sentence(facts: dict, speed_rpm: float | None, why_speed: str = "") -> str:
+    tolerance = facts["tolerance_mm"]
+    low, high = facts["range_mm"]
+    searched = " (" + ", ".join(part for part in (
+        f"searched at {speed_rpm:.0f} rpm{why_speed}" if speed_rpm is not None else "",
+        f"over {_um(low, tolerance)} to {_um(high, tolerance)}" if low is not None else "",
+        f"tolerance {_um(tolerance)}" if tolerance else "") if part) + ")"
+    searched = "" if searched == " ()" else searched
+    if facts["limit_mm"] is None:
+        top = f" {_um(high, tolerance)}" if high is not None else ""
+        return (f"Amplitude limit: above the searched range, the joint stuck up to{top}{searched}; "
+                "margins are lower bounds.")
+    text = f"Amplitude limit {_um(facts['limit_mm'], tolerance)}: "
+    if facts["stuck_mm"] is not None:
+        text += f"stuck at {_um(facts['stuck_mm'], tolerance)}, not stuck at {_um(facts['limit_mm'], tolerance)}"
+    else:
+        text += "not stuck even at the bottom of the searched range: the limit lies below it"
+    text += searched + "."
+    if not facts["monotone"]:
+        text += " NOT MONOTONE: the joint sticks again above the limit (the search's runs below)."
+    return text
+
+
+def _search_section(search: Search, root: Path, with_scene: bool) -> str:
+    """The search's runs as supporting material: one compact row each."""
+    rows = []
+    for run in sorted(search.runs, key=lambda r: (r.amplitude_mm is None, r.amplitude_mm or 0.0)):
+        amplitude = _number(1e3 * run.amplitude_mm, 4) if run.amplitude_mm is not None else "–"
+        where = _relative(run.folder, root)
+        if run.summary is None:
+            rows.append([amplitude, "not stuck (counted as loosening)" if run.ending in STOPPED_NOT_STUCK else "none",
+                         html.escape(_stopped(run.ending)), *["–"] * 6, where])
+            continue
+        s = run.summary
+        cycles = _cycles(s["equivalent_cycles"]) + (f" ({_duration(s['equivalent_engine_hours'])})"
+                                                    if s.get("equivalent_engine_hours") is not None else "")
+        loss = _percent(s["clamp_force_loss_fraction"], 2) if _has_bolts(s) else "–"
+        depth = _number(1e3 * s["max_wear_depth_mm"], 3) if s.get("max_wear_depth_mm") is not None else "–"
+        rows.append([amplitude, html.escape(s["verdict"]), html.escape(_ending(s)),
+                     _percent(s["stick_area_fraction"]), _percent(s["damaged_area_fraction"]),
+                     _percent(s.get("cof_evolved_area_fraction")), loss, depth, cycles, where])
+    for path in search.unfinished:
+        rows.append([_number(1e3 * _folder_amplitude_mm(path.parent), 4), "none",
+                     "did not finish: only results.h5.part (not converged, or interrupted)", *["–"] * 6,
+                     _relative(path.parent, root)])
+    speed = search.speed_rpm
+    first = next((r for r in search.runs if r.scene), None)
+    scene = _scene_block(first.scene, "the scene of the search (its own wing amplitude and description, not the "
+                                      "amplitudes run above)") if with_scene and first else ""
+    return (f"<div class='support'><h3>The amplitude search's runs ({_relative(search.folder, root)}), supporting the "
+            f"limit</h3><p>Each run is the scene with its wing vibration scaled to the amplitude in the first column"
+            + (f", at {speed:.0f} rpm" if speed is not None else "") + ". Areas are fractions of the area closed "
+            "after the preload; real cycles are the load cycles the run stands for.</p>"
+            + _grid(("wing amplitude [µm]", "verdict", "how it ended", "stick area", "damaged area", "COF evolved",
+                     "clamp-force loss", "max wear depth [µm]", "real cycles (engine running)", "folder"), rows)
+            + scene + "</div>")
+
+
+def _stopped(ending: str) -> str:
+    from contact.verdict import Ending
+    from pipelines.jobs.run import ENDINGS
+
+    try:
+        return ENDINGS[Ending(ending)]
+    except ValueError:
+        return "did not end"
+
+
+def _folder_amplitude_mm(folder: Path) -> float:
+    """The amplitude a search's run folder is named after (pipelines.jobs.limit.run_amplitude, µm)."""
+    return 1e-3 * float(folder.name.removeprefix("amplitude_").removesuffix("um"))
+
+
+def _ending(s: dict) -> str:
+    if s.get("loosening_evident_at_cycles") is not None:
+        count = s["loosening_evident_at_cycles"]
+        return f"loosening evident after {_cycles(count)} real cycle{_plural(count)}"
+    if s.get("shakedown_at_cycles") is not None:
+        count = s["shakedown_at_cycles"]
+        return f"shakedown after {_cycles(count)} real cycle{_plural(count)}"
+    return "ran its cycles"
+
+
+# ------------------------------------------------------------------------------------- job verdict
+
+@dataclass
+class Margins:
+    """``/margins`` of a sweep file (pipelines.jobs.margins.write_margins), mm and rpm."""
+
+    speeds_rpm: np.ndarray
+    wing_amplitude_mm: np.ndarray
+    margin: np.ndarray
+    limit_mm: float | None
+    limit_speed_rpm: float
+    calibration: float
+
+
+def _read_sweep(path: Path) -> tuple[Margins | None, dict | None]:
+    """(its margins or None, the plain multibody sweep's table or None) of a sweep file."""
     with h5py.File(path, "r") as file:
-        group = next((file[name] for name in ("margins",) if name in file), None)
-        if group is None or "speed_rpm" not in group or "margin" not in group:
-            return ""
-        speeds, margins = group["speed_rpm"][()], group["margin"][()]
-    rows = "".join(f"<tr><td>{s:.0f}</td><td{' class=unsafe' if m < 1 else ''}>{m:.2f}"
-                   f"{' NOT SAFE' if m < 1 else ''}</td></tr>" for s, m in zip(speeds, margins))
-    return (f"<h2>Safety margins ({html.escape(str(path.relative_to(root)))})</h2>"
-            "<p>margin = amplitude limit / wing amplitude at that speed; below 1 the vibration exceeds the "
-            "stick limit.</p><table><tr><th>speed [rpm]</th><th>margin</th></tr>" + rows + "</table>")
+        if file.attrs.get("fretwork_format") != "fretwork-sweep":
+            return None, None
+        if "margins" in file and "speed_rpm" in file["margins"]:
+            group = file["margins"]
+            limit = float(group.attrs.get("limit_mm", np.nan))
+            return Margins(group["speed_rpm"][()], group["wing_amplitude"][()], group["margin"][()],
+                           limit if np.isfinite(limit) else None, float(group.attrs.get("limit_speed_rpm", np.nan)),
+                           float(group.attrs.get("calibration_factor", 1.0))), None
+        if "sweep" not in file:
+            return None, None
+        group = file["sweep"]
+        return None, {"speeds_rpm": group["speed"][()], "wing_amplitude_mm": group["wing_amplitude"][()],
+                      "frequencies_hz": group["dominant_frequencies"][()], "resonance": group["resonance"][()],
+                      "failures": json.loads(group.attrs.get("failures_json", "{}")),
+                      "unsettled": json.loads(group.attrs.get("unsettled_json", "{}"))}
 
+
+def _states(m: Margins, tolerance_mm: float | None) -> list:
+    """'not judged', 'unsafe', 'at the limit' or 'safe' at each speed (as pipelines.jobs.margins judges)."""
+    out = []
+    for amplitude, margin in zip(m.wing_amplitude_mm, m.margin):
+        if not np.isfinite(amplitude):
+            out.append("not judged")
+        elif np.isfinite(margin) and margin < 1.0:
+            out.append("unsafe")
+        elif m.limit_mm is not None and tolerance_mm and abs(amplitude - m.limit_mm) <= tolerance_mm:
+            out.append("at the limit")
+        else:
+            out.append("safe")
+    return out
+
+
+def job_verdict(m: Margins, tolerance_mm: float | None = None) -> str:
+    """The job's answer in one sentence, e.g. 'UNSAFE at 600 rpm: margin 0.60 < 1' or 'safe at
+    every speed, smallest margin 1.16 at 900 rpm'."""
+    states = np.array(_states(m, tolerance_mm))
+    parts = []
+    unsafe = states == "unsafe"
+    if unsafe.any():
+        margins = ", ".join(f"{v:.2f}" for v in m.margin[unsafe])
+        parts.append(f"UNSAFE at {_rpm(m.speeds_rpm[unsafe])}: margin{'s' if unsafe.sum() > 1 else ''} {margins} < 1, "
+                     "the wing vibration exceeds the amplitude limit")
+    if (states == "at the limit").any():
+        parts.append(f"at the limit at {_rpm(m.speeds_rpm[states == 'at the limit'])}: the wing amplitude lies within "
+                     "the limit's tolerance of it")
+    if (states == "not judged").any():
+        parts.append(f"NOT JUDGED at {_rpm(m.speeds_rpm[states == 'not judged'])}: the multibody run failed there")
+    safe = states == "safe"
+    bound = "" if m.limit_mm is not None else " (a lower bound: the joint stuck over the whole searched range)"
+    if safe.any():
+        k = np.flatnonzero(safe)[int(np.argmin(m.margin[safe]))]
+        smallest = f"smallest margin {m.margin[k]:.2f} at {m.speeds_rpm[k]:.0f} rpm{bound}"
+        parts.append(f"safe at every speed, {smallest}" if safe.all() else f"safe at the others, {smallest}")
+    return "; ".join(parts)
+
+
+def _margins_table(m: Margins, tolerance_mm: float | None) -> str:
+    rows = []
+    for speed, amplitude, margin, state in zip(m.speeds_rpm, m.wing_amplitude_mm, m.margin, _states(m, tolerance_mm)):
+        css = " class=unsafe" if state != "safe" else ""
+        rows.append([f"{speed:.0f}", _number(1e3 * amplitude, 3) if np.isfinite(amplitude) else "–",
+                     f"{margin:.2f}" if np.isfinite(margin) else "–", f"<span{css}>{html.escape(state)}</span>"])
+    calibrated = "" if m.calibration == 1.0 else (
+        f" The wing amplitudes are the multibody model's times {_number(m.calibration)}, the scene's stated wing "
+        "amplitude over the multibody one at the scene's own speed.")
+    return (_grid(("speed [rpm]", "wing amplitude [µm]", "margin", "state"), rows)
+            + f"<p class='note'>margin = amplitude limit / wing amplitude at that speed; below 1 the wing vibration "
+              f"exceeds the limit.{html.escape(calibrated)}</p>")
+
+
+def _job_section(demo: dict | None, margins: Margins | None, search: Search | None) -> str:
+    """The job's answer first: its verdict, the amplitude limit, the margins per speed, the operating point."""
+    facts = _limit_facts(search, margins.limit_mm if margins else None)
+    parts = ["<h2>Job verdict</h2>"]
+    if margins is not None:
+        parts.append(f"<p class='verdict'>{html.escape(job_verdict(margins, facts['tolerance_mm']))}</p>")
+    if demo is not None:
+        parts.append(f"<p>{html.escape(_operating_sentence(demo))}</p>")
+    speed = margins.limit_speed_rpm if margins is not None and np.isfinite(margins.limit_speed_rpm) else \
+        search.speed_rpm if search is not None else None
+    why = ", the sweep's fastest speed, where the centrifugal load is largest" if margins is not None else ""
+    limit = _limit_sentence(facts, speed, why)
+    parts.append(f"<p class='verdict'>{html.escape(limit)}</p>" if margins is None else f"<p>{html.escape(limit)}</p>")
+    if margins is not None:
+        parts.append(_margins_table(margins, facts["tolerance_mm"]))
+    for warning in (demo or {}).get("warnings") or ():
+        parts.append(f"<p class='unsafe'>WARNING: {html.escape(str(warning))}</p>")
+    if (demo or {}).get("multibody_warning"):
+        parts.append(f"<p class='unsafe'>WARNING (operating run): {html.escape(demo['multibody_warning'])}</p>")
+    return "\n".join(parts)
+
+
+def _operating_sentence(d: dict) -> str:
+    margin, speed, amplitude = (d.get(key) for key in
+                                ("margin_at_operating_point", "engine_speed_rpm", "wing_amplitude_um"))
+    text = "At the operating point" + (f", {speed:.0f} rpm" if _finite(speed) else "") + (
+        f" with a wing amplitude of {_number(amplitude, 3)} µm" if _finite(amplitude) else "")
+    text += f": verdict {str(d.get('verdict', '–')).upper()}"
+    if _finite(margin):
+        text += f", margin {margin:.2f} ({d.get('operating_point', 'unsafe' if margin < 1 else 'safe')})"
+    return text + " (the operating run below)."
+
+
+def _sweep_section(table: dict) -> str:
+    """A multibody speed sweep without margins: wing amplitude and dominant frequency per speed."""
+    amplitudes = np.atleast_2d(table["wing_amplitude_mm"])
+    rows = []
+    for k, speed in enumerate(table["speeds_rpm"]):
+        key = f"{float(speed)}"
+        note = ("FAILED: " + table["failures"][key] if key in table["failures"] else
+                "NOT STEADY (amplitude not to be trusted)" if key in table["unsettled"] else
+                "order/mode crossing" if table["resonance"][k] else "")
+        rows.append([f"{speed:.0f}", *(_number(1e3 * a, 3) for a in amplitudes[k]),
+                     _number(table["frequencies_hz"][k][0], 4), html.escape(note)])
+    header = ("speed [rpm]", *(f"CW{c + 1} wing amplitude [µm]" for c in range(amplitudes.shape[1])),
+              "strongest CW1 wing frequency [Hz]", "note")
+    return "<h2>Speed sweep (multibody)</h2>" + _grid(header, rows)
+
+
+# ------------------------------------------------------------------------------------ multibody run
+
+def _is_multibody_run(path: Path) -> bool:
+    """Whether an HDF5 file is a multibody run's (``fretwork mbs``: run.h5, or the name --out gave it)."""
+    if path.name in ("results.h5", "sweep.h5", "checkpoint.h5") or path.name.startswith("interface"):
+        return False
+    try:
+        with h5py.File(path, "r") as file:
+            return file.attrs.get("fretwork_format") == "fretwork-results" and "model" in file \
+                and "parameters_json" in file["model"].attrs
+    except OSError:  # not an HDF5 file
+        return False
+
+
+def _mbs_section(path: Path, root: Path) -> str:
+    """A multibody run (``fretwork mbs``): its numbers as the CLI prints them (pipelines.cli.mbs)."""
+    from mbs.histories import SETTLED_CHANGE, steady_part, unsettled_change, wing_amplitude
+
+    with h5py.File(path, "r") as file:
+        params = json.loads(file["model"].attrs["parameters_json"])
+        torsion_hz = float(file["model/eigenfrequencies"][int(file["model"].attrs["torsion_mode"])])
+        real_time = float(file["model"].attrs.get("real_time_factor", np.nan))
+        names = sorted((n for n in file["histories"] if re.fullmatch(r"cw\d+_wing_torsion", n)),
+                       key=lambda n: int(n[2:].split("_")[0]))
+        torsion = np.array([file["histories"][n][()] for n in names])
+        crank = file["histories/crank_angle"][()]
+    amplitudes = wing_amplitude(torsion[:, steady_part(torsion.shape[1])])
+    change = unsettled_change(crank, torsion)
+    solver = params.get("solver", {})
+    if change is None:
+        steady = "too short to tell whether it is steady (its second half must span two engine cycles)"
+    else:
+        steady = (f"{'steady' if change <= SETTLED_CHANGE else 'NOT STEADY'}: the wing amplitude changes by "
+                  f"{100 * change:.1f} % between its first and last engine cycle "
+                  f"(at most {100 * SETTLED_CHANGE:.0f} %)")
+    rows = [("engine speed", f"{params['speed_rpm']:g} rpm"),
+            ("wing amplitude (half peak-to-peak over the second half)",
+             ", ".join(f"{n[:3].upper()} {_number(1e3 * a, 3)} µm" for n, a in zip(names, amplitudes))),
+            ("second half of the run", steady),
+            ("CW torsion mode (fixed interface)", f"{torsion_hz:.1f} Hz"),
+            ("run", f"{solver.get('revolutions', np.nan):g} revolutions, "
+                    f"time step {solver.get('time_step', np.nan):g} s, "
+                    f"{params.get('n_modes')} Craig–Bampton modes per CW"),
+            ("run time", f"{_number(real_time, 3)} simulated s per wall-clock s")]
+    css = "" if change is not None and change <= SETTLED_CHANGE else " class='unsafe'"
+    return (f"<h2>Multibody run ({_relative(path, root)})</h2>"
+            + (f"<p{css}>the response is {html.escape(steady.split(':')[0])}</p>") + _table(rows))
+
+
+# ------------------------------------------------------------------------------------------- page
 
 def _image(path: Path, root: Path) -> str:
     data = base64.b64encode(path.read_bytes()).decode("ascii")
-    caption = html.escape(str(path.relative_to(root)))
+    caption = _relative(path, root)
     return (f"<figure><img alt='{caption}' src='data:image/png;base64,{data}'>"
             f"<figcaption>{caption}</figcaption></figure>")
 
@@ -144,36 +649,111 @@ def versions() -> dict:
     return out
 
 
-def write_report(results_dir: str | Path, out_path: str | Path | None = None) -> Path:
-    """Write ``report.html`` (or ``out_path``) for the run or job in ``results_dir``."""
-    root = Path(results_dir)
-    if not root.is_dir():
-        raise InputError(f"{root} is not a folder of results (give the --out folder of a run or a job)")
-    def shallow_first(paths):  # a job's own summary and run before the runs of its search
+def _searches(root: Path, runs: list) -> tuple[list, list]:
+    """(the amplitude searches, the other runs): a run in an ``amplitude_…um`` folder belongs to
+    the search of the folder above it."""
+    grouped, others = {}, []
+    for run in runs:
+        if AMPLITUDE_FOLDER.fullmatch(run.folder.name):
+            grouped.setdefault(run.folder.parent, []).append(run)
+        else:
+            others.append(run)
+    for part in root.rglob("results.h5.part"):
+        if AMPLITUDE_FOLDER.fullmatch(part.parent.name) and not (part.parent / "results.h5").exists():
+            grouped.setdefault(part.parent.parent, [])
+    searches = []
+    for folder, members in sorted(grouped.items()):
+        unfinished = sorted(p for p in folder.glob("amplitude_*um/results.h5.part")
+                            if not (p.parent / "results.h5").exists())
+        record = next((json.loads(p.read_text()) for p in (folder / "limit.json", folder.parent / "limit.json")
+                       if p.is_file()), None)
+        searches.append(Search(folder, members, unfinished, record))
+    return searches, others
+
+
+def _plots(images: list, root: Path, heading: str) -> str:
+    return f"<h2>{html.escape(heading)}</h2>" + "".join(_image(p, root) for p in images) if images else ""
+
+
+@dataclass
+class Folder:
+    """What a run's or a job's folder holds, read once: contact runs (own runs and amplitude
+    searches), multibody runs, sweep files (margins or a plain sweep), the demo's summary, plots."""
+
+    root: Path
+    own_runs: list
+    searches: list
+    multibody: list
+    sweeps: list
+    demo: dict | None
+    images: list
+
+    @property
+    def margins(self) -> Margins | None:
+        return next((m for m, _ in self.sweeps if m is not None), None)
+
+    @property
+    def is_job(self) -> bool:
+        return self.demo is not None or self.margins is not None or bool(self.searches)
+
+
+def read_folder(root: Path) -> Folder:
+    """The folder's files (see :class:`Folder`); an InputError when it holds nothing to report."""
+    def shallow_first(paths):  # a job's own run before the runs of its search
         return sorted(paths, key=lambda path: (len(path.relative_to(root).parts), path))
 
-    results = shallow_first(root.rglob("results.h5"))
-    jobs = shallow_first(p for p in root.rglob("*.json") if p.name in ("summary.json", "limit.json", "margins.json"))
-    sweeps = shallow_first(root.rglob("sweep.h5"))
+    runs = [r for r in (read_run(p) for p in shallow_first(root.rglob("results.h5"))) if r is not None]
+    multibody = [p for p in shallow_first(root.rglob("*.h5")) if _is_multibody_run(p)]
+    sweeps = [_read_sweep(p) for p in shallow_first(root.rglob("sweep.h5"))]
+    demo_file = root / "summary.json"
+    demo = json.loads(demo_file.read_text()).get("summary") if demo_file.is_file() else None
     images = sorted(root.rglob("*.png"))
-    if not (results or jobs or images):
+    if not (runs or multibody or sweeps or images or any(root.rglob("limit.json"))):
         unfinished = sorted(root.rglob("results.h5.part"))
         if unfinished:
             raise InputError(f"{root} holds only {unfinished[0].relative_to(root)}: its run stopped before it "
                              "finished a cycle (the error it printed says why); nothing converged to report")
         raise InputError(f"{root} holds no fretwork results (results.h5, summary.json or plots)")
-    sections = [_job_section(p, root) for p in jobs] + [_run_section(p, root) for p in results]
-    sections += [_margins_section(p, root) for p in sweeps]
-    plots = "".join(_image(p, root) for p in images)
-    version_rows = [(k, html.escape(v)) for k, v in versions().items()]
-    labels = _table([(k, html.escape(v)) for k, v in VERDICT_MEANINGS.items()])
+    searches, own_runs = _searches(root, runs)
+    return Folder(root, own_runs, searches, multibody, sweeps, demo, images)
+
+
+def _sections(folder: Folder) -> list:
+    """The page's sections in reading order: the job's answer, its own runs, the supporting search."""
+    root, is_job = folder.root, folder.is_job
+    sections = [_job_section(folder.demo, folder.margins, folder.searches[0] if folder.searches else None)] \
+        if is_job else []
+    sections += [_sweep_section(table) for _, table in folder.sweeps if table is not None]
+    run_folders = [run.folder for run in folder.own_runs]
+    other_images = [p for p in folder.images if not any(f in p.parents for f in run_folders)]
+    if is_job:
+        sections.append(_plots(other_images, root, "Plots of the job"))
+    for run in folder.own_runs:
+        title = "Operating run" if is_job else "Run"
+        sections.append(_run_section(run, root, title))
+        sections.append(_plots([p for p in folder.images if run.folder in p.parents], root,
+                               f"Plots of the {title.lower()}"))
+    sections += [_mbs_section(p, root) for p in folder.multibody]
+    if not is_job:
+        sections.append(_plots(other_images, root, "Plots"))
+    sections += [_search_section(s, root, with_scene=not folder.own_runs) for s in folder.searches]
+    shown = {r.summary["verdict"] for s in folder.searches for r in s.runs if r.summary}
+    if shown:  # a run's own section says what its verdict means for it
+        sections.append("<h2>What the verdicts of the search mean</h2>" + _table(
+            [(k, html.escape(v)) for k, v in VERDICT_MEANINGS.items() if k in shown]))
+    sections.append(f"<h2>Versions</h2>{_table([(k, html.escape(v)) for k, v in versions().items()])}")
+    return [s for s in sections if s]
+
+
+def write_report(results_dir: str | Path, out_path: str | Path | None = None) -> Path:
+    """Write ``report.html`` (or ``out_path``) for the run or job in ``results_dir``."""
+    root = Path(results_dir)
+    if not root.is_dir():
+        raise InputError(f"{root} is not a folder of results (give the --out folder of a run or a job)")
     page = (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{REPORT_TITLE}"
             f"{html.escape(root.resolve().name)}</title><style>{STYLE}</style></head><body>"
-            f"<h1>fretwork report: {html.escape(str(root))}</h1>"
-            + "\n".join(s for s in sections if s)
-            + f"<h2>Plots</h2>{plots or '<p>no plots</p>'}"
-            + f"<h2>What the verdicts mean</h2>{labels}"
-            + f"<h2>Versions</h2>{_table(version_rows)}</body></html>")
+            f"<h1>fretwork report: {html.escape(str(root))}</h1>" + "\n".join(_sections(read_folder(root)))
+            + "</body></html>")
     target = Path(out_path) if out_path is not None else root / "report.html"
     try:
         target.write_text(page, encoding="utf-8")
