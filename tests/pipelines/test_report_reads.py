@@ -197,3 +197,18 @@ def test_an_mbs_page_gives_the_runs_numbers_and_no_verdict_glossary(tmp_path):
     assert "CW torsion mode (fixed interface) 673.5 Hz" in text
     assert "the response is steady" in text
     assert "What the verdicts" not in text and "verdict" not in text.lower()
+
+
+def test_a_limit_page_leads_with_the_limit_and_shows_the_scene_once_with_a_caveat(tmp_path):
+    """`fretwork limit`'s folder: limit.json beside runs/amplitude_…um; no operating run."""
+    job = tmp_path / "limit"
+    _search(job / "runs", (100.0, 150.0), (175.0,), speed_rpm=750.0)
+    (job / "limit.json").write_text(json.dumps({
+        "limit_um": 175.0, "limit_mm": 0.175, "bracket_um": [150.0, 175.0], "tolerance_um": 10.0,
+        "range_um": [100.0, 175.0], "monotone": True, "changes": [], "runs": []}))
+    page = write_report(job).read_text()
+    text = _text(job / "report.html")
+    limit = "Amplitude limit 175.0 µm: stuck at 150.0 µm, not stuck at 175.0 µm (searched at 750 rpm"
+    assert limit in text and text.index(limit) < text.index("The amplitude search's runs")
+    assert "sweep's fastest speed" not in text and "margin" not in text
+    assert page.count("<pre>") == 1 and "not the amplitudes run above" in text
