@@ -22,7 +22,7 @@ import numpy as np
 from mbs.histories import SETTLED_CHANGE, unsettled_message
 from mbs.model import SimulationError
 from mbs.parameters import ModelParams
-from mbs.plots import plot_campbell, plot_sweep
+from mbs.plots import plot_campbell, plot_sweep, plot_time_history
 from mbs.run import run_model
 from mbs.sweep import SweepResult
 from pipelines.cli import json_text
@@ -67,6 +67,55 @@ def _counterweight(args, params: ModelParams) -> int:
     if args.interface_histories and Path(args.interface_histories).suffix.lower() not in (".h5", ".hdf5", ".csv"):
         raise InputError(f"--interface-histories {args.interface_histories}: the file must end in .h5, .hdf5 or .csv")
     return counterweight
+
+
+def scene_calibration(path) -> tuple[str, float | None, int]:
+    """What the plots need of a scene file to name it and to calibrate the multibody amplitudes
+    as its coupling does: its name (the file's stem when it states none), its stated wing
+    amplitude (mm; None when it states none, is not coupled, or reads its interface histories from
+    a file instead of the multibody run) and its coupled CW (1 = first)."""
+    from pipelines import scene as scenes
+
+    tables = scenes.tables(path)
+    name = tables.get("scene", {}).get("name") if isinstance(tables.get("scene"), dict) else None
+    coupling = tables.get("coupling") if isinstance(tables.get("coupling"), dict) else {}
+    stated = None if coupling.get("histories") else coupling.get("wing_amplitude")
+    counterweight = coupling.get("counterweight", 1)
+    return (name or Path(path).stem, float(stated) if isinstance(stated, (int, float)) else None,
+            counterweight if isinstance(counterweight, int) else 1)
+
+
+def sweep_calibration(result: SweepResult, scene_path, speed_rpm: float) -> tuple[float | None, str]:
+    """The factor the scene's coupling multiplies the sweep's multibody amplitudes by, and a note
+    saying where it comes from: its stated wing amplitude over the sweep's amplitude of its CW
+    at its own speed ``speed_rpm``, when that speed is in the sweep; else None and how the scene
+    calibrates (no stated amplitude: the multibody amplitudes are the scene's own)."""
+    _, stated, counterweight = scene_calibration(scene_path)
+    if stated is None:
+        return None, "a scene that states no wing amplitude uses these amplitudes as they are"
+    at = np.flatnonzero(np.isclose(result.speeds_rpm, speed_rpm))
+    raw = result.wing_amplitude[at[0], counterweight - 1] if at.size and counterweight <= result.wing_amplitude.shape[1] \
+        else np.nan
+    if not np.isfinite(raw) or raw <= 0:
+        return None, (f"the scene multiplies them by its stated {1e3 * stated:g} µm / CW{counterweight}'s amplitude at "
+                      f"{speed_rpm:g} rpm, a speed not in this sweep")
+    return float(stated / raw), (f"calibration = the scene's stated {1e3 * stated:g} µm / CW{counterweight}'s "
+                                 f"{1e3 * raw:.3g} µm at {speed_rpm:g} rpm")
+
+
+def _margins_calibration(path) -> tuple[float | None, str]:
+    """The calibration factor `sweep --margins` recorded in the sweep file (/margins), if any."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as handle:
+            if "margins" in handle:
+                factor = float(handle["margins"].attrs["calibration_factor"])
+                return factor, ("calibration = the scene's stated wing amplitude / its CW's multibody amplitude at "
+                                "the scene's speed (as the margins use it)")
+    except OSError:
+        pass
+    return None, ""
 
 
 def add_sweep_parser(subparsers):
@@ -114,15 +163,18 @@ def sweep_warnings(params: ModelParams, speeds, written: str) -> list[str]:
             + check_resolution(params, speeds))
 
 
-def sweep_summary(result: SweepResult, path, plots) -> dict:
+def sweep_summary(result: SweepResult, path, plots, calibration: tuple[float | None, str] | None = None) -> dict:
     """Draw the sweep's plots into the folder ``plots`` (wing amplitude over speed with the
     crossings, Campbell diagram) and return its summary: the figures of ``--json``
     (:meth:`SweepResult.to_json`), the file ``path`` and the plots. `sweep` and `sweep --margins`
-    both report a sweep with it."""
+    both report a sweep with it. calibration: (factor or None, where it comes from) for the
+    amplitude plot (:func:`sweep_calibration`); when not given, the factor `sweep --margins` wrote
+    into the sweep file, if it did."""
     plots = Path(plots)
+    factor, note = calibration if calibration is not None else _margins_calibration(path)
     crossing_speeds = [c["speed_rpm"] for c in result.crossings]
     drawn = {"wing_amplitude": plot_sweep(result.speeds_rpm, result.wing_amplitude, plots / "sweep_wing_amplitude.png",
-                                          crossings_rpm=crossing_speeds),
+                                          crossings_rpm=crossing_speeds, calibration=factor, calibration_note=note),
              "campbell": plot_campbell(result.campbell, plots / "campbell.png")}
     return dict(result.to_json(), file=str(path), plots={name: str(drawn[name]) for name in drawn})
 
@@ -141,7 +193,8 @@ def run_sweep(args) -> int:
     except InputError as error:
         print(f"fretwork: error: {error}", file=sys.stderr)
         return 2
-    summary = sweep_summary(result, path, Path(args.plots) if args.plots else folder)
+    summary = sweep_summary(result, path, Path(args.plots) if args.plots else folder,
+                            calibration=sweep_calibration(result, args.scene, params.speed_rpm))
     if args.json:
         print(json_text(summary))
     else:
@@ -194,6 +247,11 @@ def run_single(args) -> int:
     if Path(outputs.results_file) != path:  # --out named the file (output_paths)
         os.replace(outputs.results_file, path)
     histories = outputs.histories
+    if "time_history" in outputs.plots:  # drawn again with the scene's name and calibration (the run is at its speed)
+        name, stated, coupled = scene_calibration(args.scene)
+        raw = histories.wing_amplitude[coupled - 1] if coupled <= len(histories.wing_amplitude) else 0.0
+        plot_time_history(histories, outputs.plots["time_history"], scene=name,
+                          calibration=stated / raw if stated is not None and raw > 0 else None)
     interface = None
     if args.interface_histories:
         from mbs.histories_file import from_loading, write_interface_histories

@@ -316,7 +316,7 @@ def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
     loss = np.array([100 * (r.figures.get("clamp_force_loss_fraction") or 0.0) for r in runs])
     damaged = np.array([100 * (r.figures.get("damaged_area_fraction") or 0.0) for r in runs])
     colours = {"stick": "tab:green", "partial_slip": "tab:olive", "damage": "tab:orange", "loosening": "tab:red"}
-    figure, axes = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True)
+    figure, axes = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
     low, high = result.bracket_mm
     for ax, values, label in ((axes[0], loss, "clamp-force loss (%)"), (axes[1], damaged, "damaged area (%)")):
         ax.plot(amplitude, values, color="0.6", zorder=1)
@@ -342,11 +342,11 @@ def plot_limit(result: LimitResult, path: Path, title: str) -> Path:
         cycles = run.figures.get("equivalent_cycles")
         if cycles is not None:  # upright: neighbouring amplitudes of a refined bracket sit close
             mantissa, exponent = f"{cycles:.1e}".split("e")
-            axes[0].annotate(f"{mantissa}e{int(exponent)}", (x, y), xytext=(0, 6), textcoords="offset points",
+            axes[0].annotate(f"{cycles:.0f}" if cycles < 1e4 else f"{mantissa}e{int(exponent)}", (x, y), xytext=(0, 6), textcoords="offset points",
                              ha="center", va="bottom", rotation=90, fontsize=7, color="0.25")
     bottom, top = axes[0].get_ylim()
     axes[0].set_ylim(bottom, top + 0.3 * (top - bottom))  # room for the cycle labels
-    axes[0].legend(loc="upper left", fontsize=8)
+    axes[0].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8)  # off the points
     speed = result.speed_rpm
     searched = f", searched at {speed:.0f} rpm" if speed is not None else ""
     axes[0].set_title(f"{title}{searched}: {describe_limit(result)}", fontsize=10)

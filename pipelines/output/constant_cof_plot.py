@@ -173,8 +173,10 @@ def _line_panel(ax, comparison, mesh, axes: tuple, line: tuple) -> None:
         origin, sense = start[k], direction[k]
         ax.set_xlabel(f"{'xyz'[axes[k]]} [mm] along the dashed line, {'xyz'[axes[1 - k]]} = {start[1 - k]:.4g} mm")
     else:
-        ax.set_xlabel(f"distance along the dashed line [mm], from ({start[0]:.4g}, {start[1]:.4g}) mm towards "
-                      f"({direction[0]:.3g}, {direction[1]:.3g}) in ({'xyz'[a]}, {'xyz'[b]})")
+        angle = np.degrees(np.arctan2(direction[1], direction[0]))
+        ax.set_xlabel(f"distance along the dashed line [mm], from ({'xyz'[a]}, {'xyz'[b]}) = ({start[0]:.4g}, "
+                      f"{start[1]:.4g}) mm along direction ({direction[0]:.3g}, {direction[1]:.3g}), "
+                      f"{angle:.1f}° from the {'xyz'[a]} axis")
     for model, style in zip(comparison.models, ("-", "--")):
         values = matplotlib.tri.LinearTriInterpolator(mesh, model.max_shear)(points[:, 0], points[:, 1])
         ax.plot(origin + sense * distance, np.ma.filled(values.astype(float), np.nan), style, lw=1.4, label=model.name)

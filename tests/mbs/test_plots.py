@@ -68,10 +68,10 @@ def test_the_time_history_shows_the_steady_window_of_the_wing_amplitude(figures)
         torsion = lines[2].get_ydata()
         # the black line is the torsion the amplitude is defined on: half its peak-to-peak is it
         assert 0.5 * np.ptp(torsion) == pytest.approx(1e3 * run.wing_amplitude[c], rel=1e-12)
-        assert f"amplitude {1e3 * run.wing_amplitude[c]:.3g} µm" in lines[2].get_label()
+        assert f"raw amplitude {1e3 * run.wing_amplitude[c]:.3g} µm" in lines[2].get_label()
         # the transient (50 µm at the start) is not drawn: the axis is scaled to the steady part
         assert max(abs(v) for v in ax.get_ylim()) < 10.0
-    assert "second half" in figure.axes[0].get_title()
+    assert "second half" in figure.axes[0].get_title() and "uncalibrated" in figure.axes[0].get_title()
     assert "wing amplitude" in figure.axes[0].get_title()
     # whether that half is steady is said: this synthetic run is too short to tell
     assert run.unsettled_change is None and "NOT STEADY" in figure.axes[0].get_title()
@@ -87,6 +87,7 @@ def test_every_axis_of_the_mbs_plots_has_a_unit_and_micrometres_are_µm(figures)
     plots.plot_sweep([600.0, 700.0], np.array([[1e-3, 2e-3], [3e-3, 1e-3]]), "unused.png")
     labels = [label for figure in figures for label in axis_labels(figure) if label]
     assert len(labels) == 2 * 2 + 2 + 2 + 2 + 2 - 1  # the time history's upper x axis is shared
+    assert "raw" in figures[-1].axes[0].get_ylabel()  # the sweep's amplitudes are the model's own
     for label in labels:
         assert UNIT.search(label), label
         assert "um" not in label.replace("µm", ""), label
@@ -96,8 +97,8 @@ def test_the_campbell_legend_names_modes_orders_crossings_and_the_operating_spee
     plots.plot_campbell(campbell(list(np.arange(1, 13) * 0.5) + [30.0]), "unused.png", operating_rpm=750.0)
     labels = [text.get_text() for text in figures[0].axes[0].get_legend().get_texts()]
     assert labels == ["CW modes, interface held (3)", "coupled multibody model modes (2)",
-                      "engine orders 0.5 … 6 (12, no crossing)", "engine order 30 (f = 30 · rpm / 60)",
-                      "order crosses a CW mode", "order crosses a coupled mode (resonance)",
+                      "engine orders 0.5 … 6 (12, no crossing; zoomed below)", "engine order 30 (f = 30 · rpm / 60)",
+                      "order crosses a CW mode", "order crosses a coupled mode (a crossing, not a shown resonance)",
                       "operating speed 750 rpm"]
 
 
@@ -120,3 +121,42 @@ def test_the_campbell_legend_counts_the_coupled_modes_that_were_found(figures):
     ax = figures[0].axes[0]
     assert "coupled multibody model modes (3)" in [text.get_text() for text in ax.get_legend().get_texts()]
     assert sum(line.get_color() == "0.6" for line in ax.get_lines()) == 3
+
+
+def test_many_quiet_engine_orders_are_zoomed_and_each_named(figures):
+    """Twelve gas-torque orders under 100 Hz beside modes up to 860 Hz: a panel of their own,
+    scaled to them, each line named by its order at its right end."""
+    plots.plot_campbell(campbell(list(np.arange(1, 13) * 0.5) + [30.0]), "unused.png", operating_rpm=750.0)
+    main, zoom = figures[0].axes
+    assert zoom.get_ylim()[1] == pytest.approx(1.1 * 6 * 1000.0 / 60.0)
+    named = sorted(float(text.get_text()) for text in zoom.texts)
+    assert named[-1] == 6.0 and len(named) >= 6  # every order, or every other when they crowd
+    assert zoom.get_xlabel() == "engine speed (rpm)" and main.get_ylim()[1] > 800.0
+
+
+def test_the_time_history_names_scene_speed_and_the_calibrated_amplitude(figures):
+    run = histories()
+    plots.plot_time_history(run, "unused.png", scene="user_joint", calibration=1000.0)
+    (figure,) = figures
+    title = figure.axes[0].get_title()
+    assert title.startswith("user_joint: wing tips at 750 rpm") and "calibration" in title  # 12.5 rev/s
+    torsion = figure.axes[0].get_lines()[2].get_label()
+    assert f"→ {1e3 * 1000.0 * run.wing_amplitude[0]:.3g} µm" in torsion
+    legend = figure.axes[0].get_legend()
+    assert legend.get_bbox_to_anchor().x0 > figure.axes[0].get_window_extent().x1 - 1  # beside the traces
+
+
+def test_a_crossing_is_a_resonance_only_where_the_sweep_amplitude_peaks(figures):
+    speeds = [600.0, 700.0, 800.0, 900.0]
+    amplitude = np.array([[1e-4], [3e-4], [2e-4], [1e-4]])  # mm, a peak at 700 rpm
+    plots.plot_sweep(speeds, amplitude, "unused.png", crossings_rpm=[690.0, 880.0], calibration=1000.0)
+    ax = figures[0].axes[0]
+    labels = [text.get_text() for text in ax.get_legend().get_texts()]
+    assert "order/mode crossing at an amplitude peak (resonance)" in labels
+    assert "order/mode crossing (no amplitude peak in the sweep)" in labels
+    assert "raw" in ax.get_ylabel() and "uncalibrated" in ax.get_title()
+    (scene_axis,) = ax.child_axes  # the scene's wing amplitude: the raw one × the calibration
+    assert "calibration 1000" in scene_axis.get_ylabel()
+    figures[0].canvas.draw()  # a secondary axis takes its limits when drawn
+    low, high = ax.get_ylim()
+    assert scene_axis.get_ylim() == pytest.approx((1000.0 * low, 1000.0 * high))

@@ -103,7 +103,8 @@ def _sweep_result(speeds=(700.0, 750.0)) -> SweepResult:
 def _margins(sweep: SweepResult) -> MarginResult:
     limit = LimitResult(0.2, (0.19, 0.2), 0.01, range_mm=(0.05, 0.5))
     amplitude = 1e3 * sweep.wing_amplitude[:, 0]
-    return MarginResult(sweep.speeds_rpm, amplitude, 1e3, limit, 0.2 / amplitude, float(sweep.speeds_rpm.max()))
+    # the margins divide 0.19 mm, the largest amplitude shown to stick
+    return MarginResult(sweep.speeds_rpm, amplitude, 1e3, limit, 0.19 / amplitude, float(sweep.speeds_rpm.max()))
 
 
 def test_sweep_with_margins_writes_the_sweeps_plots_and_reports_its_figures_as_sweep_does(tmp_path, monkeypatch,
@@ -127,7 +128,7 @@ def test_sweep_with_margins_writes_the_sweeps_plots_and_reports_its_figures_as_s
         "campbell.png", "sweep_wing_amplitude.png"]
     assert summary["sweep"] == json.loads(json.dumps(swept).replace(str(plain), str(with_margins)))
     assert summary["sweep"]["crossings"][0]["speed_rpm"] == 725.0 and summary["sweep"]["resonance"] == [False, True]
-    assert summary["margin"] == pytest.approx([0.2 / 0.1, 0.2 / 0.12])
+    assert summary["margin"] == pytest.approx([0.19 / 0.1, 0.19 / 0.12])
     assert summary["plot"] == str(with_margins / "margins.png")
 
     assert main(["sweep", str(scene), "--speeds", "700,750", "--workers", "0", "--out", str(with_margins),
@@ -254,7 +255,7 @@ def test_the_stick_limit_line_says_at_which_speed_the_limit_was_searched(tmp_pat
     texts = _legend_texts(monkeypatch)
     result = _margins(_sweep_result())
     plot_margins(result, tmp_path / "margins.png", "cw: fretting safety margin")
-    assert "stick limit 200 µm (searched at 750 rpm)" in texts
+    assert "sticks up to 190.0 µm (not at 200.0 µm), searched at 750 rpm" in texts
 
 
 def test_a_limit_above_the_range_is_drawn_at_its_top_saying_so(tmp_path, monkeypatch):
@@ -262,4 +263,5 @@ def test_a_limit_above_the_range_is_drawn_at_its_top_saying_so(tmp_path, monkeyp
     result = _margins(_sweep_result())
     result.limit = LimitResult(None, (0.5, None), 0.01, range_mm=(0.05, 0.5))
     plot_margins(result, tmp_path / "margins.png", "cw: fretting safety margin")
-    assert "stick limit above 500 µm, the searched range (searched at 750 rpm)" in texts
+    assert ("stuck over the whole searched range, up to 500.0 µm (searched at 750 rpm): the margins are lower "
+            "bounds") in [text.replace("\n", " ") for text in texts]
