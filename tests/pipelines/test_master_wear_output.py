@@ -90,4 +90,4 @@ def test_profile_plot_draws_the_master_wear_along_its_own_surface(finite, tmp_pa
         depth = file["final/master_wear_depth"][()]
         x = file["master_surface/coordinates"][()][:, 0]
     assert np.array_equal(master.get_xdata(), np.sort(x))
-    assert np.max(master.get_ydata()) == depth.max()
+    assert np.max(master.get_ydata()) == 1e3 * depth.max()  # drawn in µm

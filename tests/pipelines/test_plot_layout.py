@@ -141,11 +141,12 @@ def test_a_stuck_joints_round_off_is_zero_and_a_micro_slip_is_not():
         stuck = plots.Field(name, state[name], floors[name])
         assert stuck.is_zero and not stuck.shown.any(), name
     note = plots.Field("slip_range", noise, floors["slip_range"]).note()
-    assert note.startswith(f"no slip (max {noise.max():.2g} mm, round-off below")
+    assert note.startswith(f"no slip (max {1e3 * noise.max():.2g} µm, round-off below")  # drawn in µm
     sliding = _fields(x, 1e-6 + noise, 3)
     for name in ("slip_range", "fdp", "ffdp", "dissipation_in_cycle"):
         field = plots.Field(name, sliding[name], floors[name])
-        assert not field.is_zero and field.note() is None and np.array_equal(field.shown, sliding[name]), name
+        drawn_values = sliding[name] * plots.QUANTITIES[name].scale
+        assert not field.is_zero and field.note() is None and np.array_equal(field.shown, drawn_values), name
     # a joint under a hundredth of the stresses resolves a hundredth of the FDP
     low = {name: value / 100.0 if name in ("max_shear", "shear") else value for name, value in state.items()}
     assert plots.round_off(low, 3)["fdp"] == pytest.approx(floors["fdp"] / 100.0)

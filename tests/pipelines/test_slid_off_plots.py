@@ -31,7 +31,7 @@ def drawn(monkeypatch):
 
     def keep_then_save(fig, target):
         titles = [fig._suptitle.get_text() if fig._suptitle else ""] + [ax.get_title() for ax in fig.axes]
-        figures[target.name] = (" ".join(titles), _layout_problems(fig))
+        figures[target.name] = (" ".join(" ".join(titles).split()), _layout_problems(fig))  # wrapping aside
         return original(fig, target)
 
     monkeypatch.setattr(plots, "_save", keep_then_save)
@@ -92,7 +92,7 @@ def test_the_maps_of_a_run_that_slid_off_in_its_wear_phase_say_so(tmp_path, draw
     assert {"pressure_map.png", "path.png", "cycles.png", "cof_map_end_of_cof_phase.png"} <= set(drawn)
     assert len(written) == len(drawn)
     assert all("the run stopped in cycle 6: the joint slides off" in titles for titles, _ in drawn.values())
-    assert "pressure, cycle 3 (the last recorded)" in drawn["pressure_map.png"][0]
+    assert "contact pressure p, end of cycle 3 (the last recorded)" in drawn["pressure_map.png"][0]
     assert {name: problems for name, (_, problems) in drawn.items() if problems} == {}
 
 
