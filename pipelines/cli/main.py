@@ -213,26 +213,30 @@ def cmd_sweep(args) -> int:
                   "only: ignored (the sweep runs without the amplitude limit and the margins)")
         return args.multibody_handler(args)
     from pipelines.jobs.sweep import parse_speeds, sweep_paths
-    from pipelines.jobs.limit import parse_range_um
-    from pipelines.jobs.margins import describe_margins, margin_sweep, plot_margins
+    from pipelines.jobs.limit import format_um, parse_range_um
+    from pipelines.jobs.margins import describe_margins, margin_basis, margin_sweep, plot_margins
     from pipelines import scene as scenes
     from pipelines.cli.mbs import crossing_lines, model_params, sweep_summary, sweep_warnings
 
     speeds = parse_speeds(args.speeds)
-    for message in sweep_warnings(model_params(args.scene), speeds, args.speeds):
+    params = model_params(args.scene)
+    for message in sweep_warnings(params, speeds, args.speeds):
         _warn(message)
     low, high = parse_range_um(args.amplitude)
-    name = scenes.load(args.scene).name
+    scene = scenes.load(args.scene)
     folder, out = sweep_paths(args.out)
+    limit_runs = folder / "limit_runs"
     result, sweep = margin_sweep(args.scene, speeds, amplitude_range_mm=(low, high),
                                  tolerance_mm=1e-3 * args.tolerance, cache_dir=_cache(args), sweep_path=out,
-                                 out_dir=folder / "limit_runs", scheduler=args.scheduler, workers=args.workers,
+                                 out_dir=limit_runs, scheduler=args.scheduler, workers=args.workers,
                                  progress=not getattr(args, "quiet", False))
     plots = Path(args.plots) if args.plots else folder
-    # the multibody sweep as plain `sweep` reports it (uncalibrated amplitudes, mm, every CW)
-    swept = sweep_summary(sweep, out, plots)
-    plot = plot_margins(result, plots / "margins.png", f"{name}: fretting safety margin")
-    summary = dict(result.to_json(), file=str(out), plot=str(plot), sweep=swept)
+    # the multibody sweep as plain `sweep` reports it (uncalibrated amplitudes, mm, every CW), its
+    # plot with the margins' calibration
+    swept = sweep_summary(sweep, out, plots, calibration=_margins_calibration(scene, params.speed_rpm, result))
+    plot = plot_margins(result, plots / "margins.png", f"{scene.name}: fretting safety margin")
+    summary = dict(result.to_json(), file=str(out), plot=str(plot), limit_plot=str(limit_runs / "limit.png"),
+                   limit_file=str(limit_runs / "limit.json"), sweep=swept)
     if args.json:
         print(json_text(summary))
     else:
@@ -241,15 +245,30 @@ def cmd_sweep(args) -> int:
                  "not judged": "  not judged: the multibody run failed"}
         for k, (speed, amplitude, margin) in enumerate(zip(result.speeds_rpm, result.wing_amplitude_mm, result.margin)):
             print(f"{speed:8.1f} {1e3 * amplitude:9.1f} {margin:8.2f}{flags[result.state(k)]}")
-        limit = "above the searched range" if summary["limit_um"] is None else f"{summary['limit_um']:.1f} µm"
-        print(f"amplitude limit {limit} (searched at {result.limit_speed_rpm:.0f} rpm); "
+        divided = format_um(result.limit.margin_limit_mm, result.limit.tolerance_mm)
+        print(f"margins divide {divided} µm: {margin_basis(result)}; "
               f"calibration factor {result.calibration:.4g} (the scene's stated wing amplitude / the multibody "
               f"wing amplitude at its own speed: every speed's multibody amplitude is multiplied by it)")
         print(describe_margins(result))
         for line in crossing_lines(sweep):
             print(line)
-        print(f"results: {out}, plots: {plot}, {', '.join(swept['plots'].values())}")
+        print(f"results: {out}, plots: {plot}, {summary['limit_plot']}, {', '.join(swept['plots'].values())}")
     return 0
+
+
+def _margins_calibration(scene, speed_rpm: float, result) -> tuple[float | None, str]:
+    """The factor the margins multiplied the sweep's multibody amplitudes by and where it comes
+    from, for :func:`pipelines.cli.mbs.sweep_summary`; None when the scene states no wing
+    amplitude: its multibody amplitudes are then its own (:func:`pipelines.jobs.margins.calibration_factor`)."""
+    from pipelines.coupling import CouplingSettings
+    from pipelines.jobs.limit import format_um
+
+    stated = scene.data["coupling"].get("wing_amplitude")
+    if stated is None:
+        return None, "a scene that states no wing amplitude uses these amplitudes as they are"
+    return result.calibration, (f"calibration = the scene's stated {format_um(stated)} µm / "
+                                f"CW{CouplingSettings.of(scene).counterweight}'s multibody amplitude at the scene's "
+                                f"{speed_rpm:g} rpm (as the margins use it)")
 
 
 def cmd_reduce(args) -> int:

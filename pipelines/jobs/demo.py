@@ -4,7 +4,8 @@
 2. contact model: mesh, assemble and condense the CW–web joint with its inertia patterns;
 3. COF and wear phases of the scene at its wing amplitude (normal operation): the verdict;
 4. amplitude limit: the lowest wing amplitude that does not end stuck (coarse tolerance);
-5. speed sweep of the multibody model and the fretting safety margin at every speed.
+5. speed sweep of the multibody model and the fretting safety margin at every speed: the largest
+   amplitude shown to stick (the lower end of the limit's bracket) / the wing amplitude there.
 
 The demo runs a shorter procedure than the shipped scene (``DEMO_OVERRIDES``: 60 COF cycles,
 30 wear cycles; the vibration's run-up kept the same share of the COF phase) so that it
@@ -103,10 +104,12 @@ def run_demo(out_dir, *, scene_path=DEFAULT_SCENE, overrides=None, speeds_rpm=DE
 
 def _summary(name: str, s: dict, limit, margins, times: dict) -> dict:
     """The demo's summary: the operating run (``s``, its run summary), the amplitude limit,
-    the margins over the speed sweep and the total wall time (s)."""
-    from pipelines.jobs.margins import describe_margins
+    the margins over the speed sweep and the total wall time (s). The margins, the operating
+    point's too, divide the largest amplitude shown to stick (``margin_amplitude_um``; a bound
+    when the search's range stuck throughout or nowhere: ``margin_bound``)."""
+    from pipelines.jobs.margins import describe_margins, margin_basis
 
-    operating_margin = limit.margin_limit_mm / s["wing_amplitude_mm"]
+    point = _operating_point(s, limit, margins)
     return {
         "scene": name,
         "engine_speed_rpm": s["engine_speed_rpm"],
@@ -117,15 +120,34 @@ def _summary(name: str, s: dict, limit, margins, times: dict) -> dict:
         "bolt_force_final_N": s.get("bolt_force_final_N"),
         "clamp_force_loss_fraction": s.get("clamp_force_loss_fraction"),
         "amplitude_limit_um": None if limit.limit_mm is None else 1e3 * limit.limit_mm,
-        "margin_at_operating_point": operating_margin,
-        "operating_point": ("unsafe" if operating_margin < 1 else "at the limit" if limit.limit_mm is not None
-                            and abs(limit.limit_mm - s["wing_amplitude_mm"]) <= limit.tolerance_mm else "safe"),
+        "margin_basis": margin_basis(margins),
+        "margin_at_operating_point": float(point.margin[0]),
+        "operating_point": _operating_state(point),
         **{k: v for k, v in margins.to_json().items()
-           if k in ("smallest_margin", "smallest_margin_speed_rpm", "unsafe_speeds", "at_limit_speeds", "warnings")},
+           if k in ("bracket_um", "margin_amplitude_um", "margin_bound", "smallest_margin", "smallest_margin_speed_rpm",
+                    "unsafe_speeds", "at_limit_speeds", "warnings")},
         **({"multibody_warning": s["multibody_warning"]} if s.get("multibody_warning") else {}),
         "margins": describe_margins(margins),
         "wall_time_s": sum(times.values()),
     }
+
+
+def _operating_point(s: dict, limit, margins):
+    """The operating run as a one-speed :class:`MarginResult`, judged by the margins' own rules."""
+    from pipelines.jobs.margins import MarginResult
+
+    amplitude = np.array([s["wing_amplitude_mm"]], dtype=float)
+    with np.errstate(divide="ignore"):
+        margin = limit.margin_limit_mm / amplitude
+    return MarginResult(np.array([s["engine_speed_rpm"]], dtype=float), amplitude, margins.calibration, limit,
+                        margin, margins.limit_speed_rpm)
+
+
+def _operating_state(point) -> str:
+    """'unsafe', 'at the limit', 'safe', or 'not shown safe' when nothing of the searched range
+    stuck (the margin is then an upper bound: no amplitude was shown to stick)."""
+    state = point.state(0)
+    return "not shown safe" if state == "at the limit" and point.limit.margin_bound == "upper bound" else state
 
 
 def describe(result: DemoResult) -> str:
@@ -136,12 +158,12 @@ def describe(result: DemoResult) -> str:
     if s["bolt_force_initial_N"] is not None:
         lines.append(f"  clamp force {s['bolt_force_initial_N'] / 1e3:.0f} kN -> {s['bolt_force_final_N'] / 1e3:.0f} kN "
                      f"({100 * s['clamp_force_loss_fraction']:.2f} % loss)")
-    if s["amplitude_limit_um"] is None:
-        lines.append("  amplitude limit: above the searched range (stuck throughout; margins are lower bounds)")
-    else:
-        lines.append(f"  amplitude limit {s['amplitude_limit_um']:.0f} µm: margin {s['margin_at_operating_point']:.2f} "
-                     f"at the operating point ({s['operating_point'].upper() if s['operating_point'] != 'safe' else 'safe'}), "
-                     f"smallest {s['smallest_margin']:.2f} at {s['smallest_margin_speed_rpm']:.0f} rpm")
+    state = s["operating_point"]
+    smallest = ("" if s["smallest_margin"] is None else
+                f", smallest {s['smallest_margin']:.2f} at {s['smallest_margin_speed_rpm']:.0f} rpm")
+    lines.append(f"  {s['margin_basis']}{': ' if s['margin_bound'] == 'stuck' else '; '}"
+                 f"margin {s['margin_at_operating_point']:.2f} at the operating point "
+                 f"({state if state == 'safe' else state.upper()}){smallest}")
     lines.append(f"  margins: {s['margins']}")
     if s.get("multibody_warning"):
         lines.append(f"  WARNING (operating run): {s['multibody_warning']}")
