@@ -655,8 +655,9 @@ class ContactSolver:
         succeed let the next grow back by a factor two (growing after every success would
         fail every other attempt where the admissible size is steady), so an increment may
         take many sub-steps (a large cycle jump against the wear cap) while no sub-step is
-        smaller than 2^-max_cutbacks of the increment. Returns the converged equilibrium, the advanced state, the final
-        point status and the iteration counters. Raises :class:`ConvergenceError` when a
+        smaller than 2^-max_cutbacks of the increment. Returns the converged equilibrium, the advanced state, the point
+        status over the increment (the worst of its sub-steps: slip over stick over open) and
+        the iteration counters. Raises :class:`ConvergenceError` when a
         sub-step of that smallest size still fails.
         """
         with blas_threads(self.settings.blas_threads):
@@ -703,9 +704,12 @@ def advance_with_cutbacks(solver, start, state: ContactState, amplitudes: np.nda
             streak = 0
             continue
         equilibrium, response = solved
-        state, status = advance(state, response, solver.law, cof_evolution=effects.cof_evolution,
-                                wear=effects.wear, cycle_jump=effects.cycle_jump,
-                                cof_jump=effects.cycle_jump if effects.cof_jump else 1.0)
+        state, substep_status = advance(state, response, solver.law, cof_evolution=effects.cof_evolution,
+                                        wear=effects.wear, cycle_jump=effects.cycle_jump,
+                                        cof_jump=effects.cycle_jump if effects.cof_jump else 1.0)
+        # the increment's status is the worst of its sub-steps, as a cycle's is the worst of its
+        # increments: a point that slid in a cut-back sub-step and stuck in the last one slid
+        status = substep_status if status is None else np.maximum(status, substep_status)
         stats.substeps += 1
         done = reach
         streak += 1
