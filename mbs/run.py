@@ -32,11 +32,17 @@ class RunOutputs:
     plots: dict[str, Path]
 
 
-def run_model(params: ModelParams, out_dir, *, bodies: tuple | None = None,
-              campbell_speeds_rpm=None) -> RunOutputs:
+def run_model(params: ModelParams, out_dir, *, bodies: tuple | None = None, campbell_speeds_rpm=None,
+              scene: str | None = None, stated_wing_amplitude_mm: float | None = None,
+              counterweight: int = 1) -> RunOutputs:
     """Simulate params, analyse the steady second half of the run and write run.h5 + PNGs to out_dir.
 
     bodies: (reduced CW, reduced throw or None) from :func:`mbs.model.reduce_bodies`; reduced here if None.
+
+    scene: its name, for the time-history plot's title. stated_wing_amplitude_mm: the wing
+    amplitude a coupled scene states for its CW ``counterweight`` (1 = first), the run being at the
+    scene's speed; the time-history plot then names the calibrated amplitudes beside the raw ones
+    (:func:`calibration`).
 
     campbell_speeds_rpm: speeds of the Campbell diagram (default 0.1 to 1.3 x engine speed); the
     diagram carries the reduced-CW modes and the coupled-model modes (one eigen-analysis per speed).
@@ -67,7 +73,8 @@ def run_model(params: ModelParams, out_dir, *, bodies: tuple | None = None,
     shaft_hz = params.speed_rpm / 60.0
     f_max = 1.25 * max(reduced.eigenfrequencies.max(), (orders.max() if orders.size else 0.0) * shaft_hz)
     plots = {
-        "time_history": plot_time_history(histories, out_dir / "wing_time_history.png"),
+        "time_history": plot_time_history(histories, out_dir / "wing_time_history.png", scene=scene,
+                                          calibration=calibration(histories, stated_wing_amplitude_mm, counterweight)),
         "spectrum": plot_spectrum(spectra["wing_torsion"], out_dir / "wing_spectrum.png",
                                   title=f"wing torsion, {params.speed_rpm:g} rpm", x_max=f_max),
         "campbell": plot_campbell(campbell, out_dir / "campbell.png", operating_rpm=params.speed_rpm),
@@ -78,3 +85,14 @@ def run_model(params: ModelParams, out_dir, *, bodies: tuple | None = None,
                                                 x_max=f_max / shaft_hz)
     return RunOutputs(histories=histories, reduced=reduced, spectra=spectra, campbell=campbell,
                       results_file=results_file, plots=plots)
+
+
+def calibration(histories: RunHistories, stated_wing_amplitude_mm: float | None,
+                counterweight: int = 1) -> float | None:
+    """The factor a coupled scene multiplies this run's amplitudes by: its stated wing amplitude
+    (mm) over this run's wing amplitude of its CW ``counterweight`` (1 = first); None when it
+    states none, or the run has no such CW or no wing vibration to scale."""
+    if stated_wing_amplitude_mm is None or not 1 <= counterweight <= len(histories.wing_amplitude):
+        return None
+    raw = float(histories.wing_amplitude[counterweight - 1])
+    return stated_wing_amplitude_mm / raw if raw > 0 else None

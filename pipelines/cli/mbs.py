@@ -22,7 +22,7 @@ import numpy as np
 from mbs.histories import SETTLED_CHANGE, unsettled_message
 from mbs.model import SimulationError
 from mbs.parameters import ModelParams
-from mbs.plots import plot_campbell, plot_sweep, plot_time_history
+from mbs.plots import plot_campbell, plot_sweep
 from mbs.run import run_model
 from mbs.sweep import SweepResult
 from pipelines.cli import json_text
@@ -229,6 +229,7 @@ def run_single(args) -> int:
     folder, path = output_paths(args.out, RUN_FILE)
     try:
         params = model_params(args.scene)
+        name, stated, coupled = scene_calibration(args.scene)
         counterweight = _counterweight(args, params)
         resolution_warnings = check_resolution(params, [params.speed_rpm])
         if path.name != RUN_FILE and (folder / RUN_FILE).exists():
@@ -239,19 +240,14 @@ def run_single(args) -> int:
         return 2
     for message in resolution_warnings:
         print(f"fretwork: warning: {message}", file=sys.stderr)
-    try:
-        outputs = run_model(params, folder)
+    try:  # the run is at the scene's speed: its stated wing amplitude calibrates the time-history plot
+        outputs = run_model(params, folder, scene=name, stated_wing_amplitude_mm=stated, counterweight=coupled)
     except SimulationError as error:
         print(f"fretwork: error: the simulation stopped: {error}", file=sys.stderr)
         return 1
     if Path(outputs.results_file) != path:  # --out named the file (output_paths)
         os.replace(outputs.results_file, path)
     histories = outputs.histories
-    if "time_history" in outputs.plots:  # drawn again with the scene's name and calibration (the run is at its speed)
-        name, stated, coupled = scene_calibration(args.scene)
-        raw = histories.wing_amplitude[coupled - 1] if coupled <= len(histories.wing_amplitude) else 0.0
-        plot_time_history(histories, outputs.plots["time_history"], scene=name,
-                          calibration=stated / raw if stated is not None and raw > 0 else None)
     interface = None
     if args.interface_histories:
         from mbs.histories_file import from_loading, write_interface_histories

@@ -1,15 +1,19 @@
 """A complete run: HDF5 follows the shared /histories contract, the acceleration field balances the
 interface force (Newton's second law), effects switch items on and off."""
 
+from types import SimpleNamespace
+
 import h5py
 import numpy as np
 import pytest
 
+import mbs.plots
+import mbs.run
 from mbs.counterweight import reduce_counterweight
 from mbs.model import simulate
 from mbs.parameters import ModelParams, SolverParams
 from mbs.results import acceleration_field
-from mbs.run import run_model
+from mbs.run import calibration, run_model
 
 
 @pytest.fixture(scope="module")
@@ -17,9 +21,15 @@ def reduced_cw2():
     return reduce_counterweight(ModelParams().counterweight, n_modes=2)
 
 
-def test_run_writes_the_shared_history_layout_and_plots(tmp_path, reduced_cw2):
+def test_run_writes_the_shared_history_layout_and_plots(tmp_path, reduced_cw2, monkeypatch):
+    drawn = []
+    monkeypatch.setattr(mbs.run, "plot_time_history",
+                        lambda *args, **kwargs: drawn.append(kwargs) or mbs.plots.plot_time_history(*args, **kwargs))
     params = ModelParams(n_modes=2, solver=SolverParams(revolutions=2.0, time_step=1e-4))
-    outputs = run_model(params, tmp_path, bodies=(reduced_cw2, None))
+    outputs = run_model(params, tmp_path, bodies=(reduced_cw2, None), scene="engine", stated_wing_amplitude_mm=0.1,
+                        counterweight=2)
+    # drawn once, named and calibrated as the scene states: 0.1 mm over this run's CW2 amplitude
+    assert drawn == [{"scene": "engine", "calibration": pytest.approx(0.1 / outputs.histories.wing_amplitude[1])}]
     with h5py.File(outputs.results_file) as root:
         assert root.attrs["fretwork_format"] == "fretwork-results" and root.attrs["format_version"] == 1
         histories = root["histories"]
@@ -55,3 +65,12 @@ def test_torsional_vibration_effect_lets_the_shaft_speed_fluctuate(reduced_cw2):
     speed = ModelParams().shaft_speed
     assert np.abs(held.crank_speed - speed).max() < 1e-9 * speed
     assert np.abs(elastic.crank_speed - speed).max() > 1e-4 * speed
+
+
+def test_the_calibration_is_the_stated_amplitude_over_the_runs_own():
+    histories = SimpleNamespace(wing_amplitude=np.array([2e-4, 5e-5]))
+    assert calibration(histories, 0.1, 1) == pytest.approx(500.0)
+    assert calibration(histories, 0.1, 2) == pytest.approx(2000.0)
+    assert calibration(histories, None, 1) is None  # the scene states none: raw amplitudes are its own
+    assert calibration(histories, 0.1, 3) is None  # no such CW
+    assert calibration(SimpleNamespace(wing_amplitude=np.array([0.0])), 0.1, 1) is None  # nothing to scale

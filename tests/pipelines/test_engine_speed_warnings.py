@@ -43,7 +43,7 @@ def _scene(tmp_path, speed):
 def test_fretwork_mbs_warns_once_of_the_scenes_speed_and_still_runs(tmp_path, monkeypatch, capsys):
     import pipelines.cli.mbs as cli
 
-    def ran(params, out):
+    def ran(params, out, **kwargs):
         assert params.speed_rpm == 20000.0
         raise SimulationError("stopped by the test: the run was started")
 

@@ -141,7 +141,7 @@ def test_sweep_with_margins_writes_the_sweeps_plots_and_reports_its_figures_as_s
 # 3. mbs --out FILE.h5
 
 def _fake_run(calls):
-    def run(params, folder):
+    def run(params, folder, **kwargs):
         folder = Path(folder)
         calls.append(folder)
         folder.mkdir(parents=True, exist_ok=True)
@@ -182,7 +182,7 @@ def test_mbs_into_a_folder_is_as_before(tmp_path, monkeypatch, capsys):
 def test_mbs_does_not_rename_over_a_run_file_already_beside_the_named_one(tmp_path, monkeypatch, capsys):
     import pipelines.cli.mbs as cli
 
-    def refuse(*args):
+    def refuse(*args, **kwargs):
         raise SimulationError("the run was started")
 
     monkeypatch.setattr(cli, "run_model", refuse)
