@@ -343,23 +343,56 @@ class Search:
                       + [(_folder_amplitude_mm(p.parent), None) for p in self.unfinished])
 
 
-def _limit_facts(search: Search | None, limit_mm: float | None) -> dict:
-    """The limit, its bracket, range, tolerance and monotony: from the job's limit.json, else
-    read off the search's runs (a run without a verdict stopped: not stuck)."""
-    if search is not None and search.record:
-        r = search.record
-        mm = (lambda um: None if um is None else 1e-3 * um)
-        return {"limit_mm": r.get("limit_mm"), "stuck_mm": mm((r.get("bracket_um") or [None])[0]),
-                "range_mm": [mm(v) for v in r.get("range_um") or (None, None)],
-                "tolerance_mm": mm(r.get("tolerance_um")), "monotone": r.get("monotone", True)}
-    facts = {"limit_mm": limit_mm, "stuck_mm": None, "range_mm": (None, None), "tolerance_mm": None, "monotone": True}
-    runs = search.verdicts() if search is not None else []
-    if runs:
-        facts["range_mm"] = (runs[0][0], runs[-1][0])
-        if limit_mm is not None:
-            facts["stuck_mm"] = max((a for a, v in runs if v == "stick" and a < limit_mm), default=None)
-            facts["monotone"] = not any(v == "stick" and a > limit_mm for a, v in runs)
+def _limit_facts(record: dict | None, search: Search | None, margins: Margins | None) -> dict:
+    """The limit, its bracket, range, tolerance, monotony and what the margins divide
+    (``margin_mm``, ``margin_bound`` as :class:`pipelines.jobs.limit.LimitResult` says them): from
+    the job's limit.json (``fretwork limit``, the demo, and ``sweep --margins`` in its limit_runs/),
+    else read off the search's runs (a run without a verdict stopped: not stuck), for folders
+    written before sweep --margins wrote limit.json. ``margin_bound`` is None where neither a
+    record nor the runs tell what stuck."""
+    from pipelines.jobs.limit import LimitResult
+
+    mm = (lambda um: None if um is None else 1e-3 * um)
+    limit_mm = margins.limit_mm if margins is not None else None
+    if record:
+        facts = {"limit_mm": record.get("limit_mm"), "stuck_mm": mm((record.get("bracket_um") or [None])[0]),
+                 "range_mm": [mm(v) for v in record.get("range_um") or (None, None)],
+                 "tolerance_mm": mm(record.get("tolerance_um")), "monotone": record.get("monotone", True),
+                 "margin_mm": mm(record.get("margin_amplitude_um")), "margin_bound": record.get("margin_bound")}
+        known = True
+    else:
+        facts = {"limit_mm": limit_mm, "stuck_mm": None, "range_mm": (None, None), "tolerance_mm": None,
+                 "monotone": True, "margin_mm": None, "margin_bound": None}
+        runs = search.verdicts() if search is not None else []
+        known = bool(runs)
+        if runs:
+            facts["range_mm"] = (runs[0][0], runs[-1][0])
+            if limit_mm is not None:
+                facts["stuck_mm"] = max((a for a, v in runs if v == "stick" and a < limit_mm), default=None)
+                facts["monotone"] = not any(v == "stick" and a > limit_mm for a, v in runs)
+    if facts["margin_bound"] is None and margins is not None and margins.margin_bound is not None:
+        facts["margin_mm"], facts["margin_bound"] = margins.margin_amplitude_mm, margins.margin_bound
+    if facts["stuck_mm"] is None and facts["margin_bound"] == "stuck":  # /margins says what stuck
+        facts["stuck_mm"] = facts["margin_mm"]
+    if facts["margin_bound"] is None and known:  # a record or runs of before the margins were conservative
+        limit = LimitResult(facts["limit_mm"], (facts["stuck_mm"] if facts["limit_mm"] is not None
+                                                else facts["range_mm"][1], facts["limit_mm"]),
+                            facts["tolerance_mm"] or 0.0, range_mm=tuple(facts["range_mm"]))
+        facts["margin_mm"], facts["margin_bound"] = limit.margin_limit_mm, limit.margin_bound
     return facts
+
+
+def _limit_result(facts: dict):
+    """The facts as a :class:`pipelines.jobs.limit.LimitResult`, whose rules judge the margins;
+    where nothing tells what stuck (``margin_bound`` None), the bracket is the limit alone."""
+    from pipelines.jobs.limit import LimitResult
+
+    limit_mm = facts["limit_mm"]
+    if limit_mm is None:
+        bracket = (facts["margin_mm"] or facts["range_mm"][1], None)
+    else:
+        bracket = (limit_mm if facts["margin_bound"] is None else facts["stuck_mm"], limit_mm)
+    return LimitResult(limit_mm, bracket, facts["tolerance_mm"] or 0.0, range_mm=tuple(facts["range_mm"]))
 
 
 def _limit_sentence(facts: dict, speed_rpm: float | None, why_speed: str = "") -> str:
@@ -457,6 +490,8 @@ class Margins:
     limit_mm: float | None
     limit_speed_rpm: float
     calibration: float
+    margin_amplitude_mm: float | None = None  # what the margins divide; None in files of before 3efc5ce
+    margin_bound: str | None = None  # "stuck", "lower bound", "upper bound" (LimitResult.margin_bound)
 
 
 def _read_sweep(path: Path) -> tuple[Margins | None, dict | None]:
@@ -467,9 +502,12 @@ def _read_sweep(path: Path) -> tuple[Margins | None, dict | None]:
         if "margins" in file and "speed_rpm" in file["margins"]:
             group = file["margins"]
             limit = float(group.attrs.get("limit_mm", np.nan))
+            divided = group.attrs.get("margin_amplitude_mm")
+            bound = group.attrs.get("margin_bound")
             return Margins(group["speed_rpm"][()], group["wing_amplitude"][()], group["margin"][()],
                            limit if np.isfinite(limit) else None, float(group.attrs.get("limit_speed_rpm", np.nan)),
-                           float(group.attrs.get("calibration_factor", 1.0))), None
+                           float(group.attrs.get("calibration_factor", 1.0)),
+                           None if divided is None else float(divided), None if bound is None else str(bound)), None
         if "sweep" not in file:
             return None, None
         group = file["sweep"]
@@ -479,38 +517,53 @@ def _read_sweep(path: Path) -> tuple[Margins | None, dict | None]:
                       "unsettled": json.loads(group.attrs.get("unsettled_json", "{}"))}
 
 
-def _states(m: Margins, tolerance_mm: float | None) -> list:
-    """'not judged', 'unsafe', 'at the limit' or 'safe' at each speed (as pipelines.jobs.margins judges)."""
-    out = []
-    for amplitude, margin in zip(m.wing_amplitude_mm, m.margin):
-        if not np.isfinite(amplitude):
-            out.append("not judged")
-        elif np.isfinite(margin) and margin < 1.0:
-            out.append("unsafe")
-        elif m.limit_mm is not None and tolerance_mm and abs(amplitude - m.limit_mm) <= tolerance_mm:
-            out.append("at the limit")
-        else:
-            out.append("safe")
-    return out
+def _states(m: Margins, facts: dict) -> list:
+    """'not judged', 'unsafe', 'at the limit', 'not shown safe' (nothing of the searched range
+    stuck) or 'safe' at each speed, as :meth:`pipelines.jobs.margins.MarginResult.state` judges
+    the file's margins against the limit's bracket."""
+    from pipelines.jobs.margins import MarginResult
+
+    judged = MarginResult(m.speeds_rpm, m.wing_amplitude_mm, m.calibration, _limit_result(facts), m.margin,
+                          m.limit_speed_rpm)
+    states = [judged.state(k) for k in range(len(m.speeds_rpm))]
+    if facts["margin_bound"] == "upper bound":
+        return ["not shown safe" if state == "at the limit" else state for state in states]
+    return states
 
 
-def job_verdict(m: Margins, tolerance_mm: float | None = None) -> str:
-    """The job's answer in one sentence, e.g. 'UNSAFE at 600 rpm: margin 0.60 < 1' or 'safe at
-    every speed, smallest margin 1.16 at 900 rpm'."""
-    states = np.array(_states(m, tolerance_mm))
+def _divided(facts: dict, m: Margins) -> str:
+    """What the margins divide, in words, as pipelines.jobs.margins.describe_margins says it."""
+    tolerance = facts["tolerance_mm"]
+    amplitude = _um(facts["margin_mm"], tolerance) if facts["margin_mm"] is not None else ""
+    return {"stuck": f"{amplitude}, the largest amplitude shown to stick",
+            "lower bound": f"{amplitude}, the top of the searched range, all of which stuck",
+            "upper bound": f"{amplitude}, the bottom of the searched range, which did not stick"}.get(
+        facts["margin_bound"] if m.margin_amplitude_mm is not None else None, "the amplitude limit")
+
+
+def job_verdict(m: Margins, facts: dict | None = None) -> str:
+    """The job's answer in one sentence, e.g. 'UNSAFE at 600 rpm: margin 0.60 < 1, ...' or 'safe
+    at every speed, smallest margin 1.16 at 900 rpm'. facts: the limit's (:func:`_limit_facts`;
+    read off ``m`` alone when not given)."""
+    facts = facts if facts is not None else _limit_facts(None, None, m)
+    states = np.array(_states(m, facts))
     parts = []
     unsafe = states == "unsafe"
     if unsafe.any():
         margins = ", ".join(f"{v:.2f}" for v in m.margin[unsafe])
         parts.append(f"UNSAFE at {_rpm(m.speeds_rpm[unsafe])}: margin{'s' if unsafe.sum() > 1 else ''} {margins} < 1, "
-                     "the wing vibration exceeds the amplitude limit")
+                     f"the wing vibration exceeds {_divided(facts, m)}")
     if (states == "at the limit").any():
         parts.append(f"at the limit at {_rpm(m.speeds_rpm[states == 'at the limit'])}: the wing amplitude lies within "
-                     "the limit's tolerance of it")
+                     "the limit's tolerance of its bracket")
+    if (states == "not shown safe").any():
+        parts.append(f"not shown safe at {_rpm(m.speeds_rpm[states == 'not shown safe'])}: nothing in the searched "
+                     "range stuck, the margins are upper bounds")
     if (states == "not judged").any():
         parts.append(f"NOT JUDGED at {_rpm(m.speeds_rpm[states == 'not judged'])}: the multibody run failed there")
     safe = states == "safe"
-    bound = "" if m.limit_mm is not None else " (a lower bound: the joint stuck over the whole searched range)"
+    bound = " (a lower bound: the joint stuck over the whole searched range)" \
+        if facts["margin_bound"] == "lower bound" or (facts["margin_bound"] is None and m.limit_mm is None) else ""
     if safe.any():
         k = np.flatnonzero(safe)[int(np.argmin(m.margin[safe]))]
         smallest = f"smallest margin {m.margin[k]:.2f} at {m.speeds_rpm[k]:.0f} rpm{bound}"
@@ -518,26 +571,36 @@ def job_verdict(m: Margins, tolerance_mm: float | None = None) -> str:
     return "; ".join(parts)
 
 
-def _margins_table(m: Margins, tolerance_mm: float | None) -> str:
+def _margins_table(m: Margins, facts: dict) -> str:
     rows = []
-    for speed, amplitude, margin, state in zip(m.speeds_rpm, m.wing_amplitude_mm, m.margin, _states(m, tolerance_mm)):
+    for speed, amplitude, margin, state in zip(m.speeds_rpm, m.wing_amplitude_mm, m.margin, _states(m, facts)):
         css = " class=unsafe" if state != "safe" else ""
         rows.append([f"{speed:.0f}", _number(1e3 * amplitude, 3) if np.isfinite(amplitude) else "–",
                      f"{margin:.2f}" if np.isfinite(margin) else "–", f"<span{css}>{html.escape(state)}</span>"])
     calibrated = "" if m.calibration == 1.0 else (
         f" The wing amplitudes are the multibody model's times {_number(m.calibration)}, the scene's stated wing "
         "amplitude over the multibody one at the scene's own speed.")
+    if m.margin_amplitude_mm is None:  # written before the margins divided an amplitude that stuck
+        said = ("margin = amplitude limit (the lowest amplitude found not stuck) / wing amplitude at that speed, as "
+                "this older file holds it: inside the limit's bracket a margin of 1 or more is not shown safe.")
+    else:
+        said = (f"margin = {_divided(facts, m)} / wing amplitude at that speed; below 1 the wing vibrates more than "
+                "that." + (" The margins are lower bounds." if facts["margin_bound"] == "lower bound" else
+                           " The margins are upper bounds: no speed is shown safe."
+                           if facts["margin_bound"] == "upper bound" else ""))
     return (_grid(("speed [rpm]", "wing amplitude [µm]", "margin", "state"), rows)
-            + f"<p class='note'>margin = amplitude limit / wing amplitude at that speed; below 1 the wing vibration "
-              f"exceeds the limit.{html.escape(calibrated)}</p>")
+            + f"<p class='note'>{html.escape(said + calibrated)}</p>")
 
 
-def _job_section(demo: dict | None, margins: Margins | None, search: Search | None) -> str:
-    """The job's answer first: its verdict, the amplitude limit, the margins per speed, the operating point."""
-    facts = _limit_facts(search, margins.limit_mm if margins else None)
+def _job_section(demo: dict | None, margins: Margins | None, search: Search | None,
+                 record: dict | None = None) -> str:
+    """The job's answer first: its verdict, the amplitude limit, the margins per speed, the
+    operating point. record: the job's limit.json (the search's own when not given)."""
+    facts = _limit_facts(record if record is not None else search.record if search is not None else None,
+                         search, margins)
     parts = ["<h2>Job verdict</h2>"]
     if margins is not None:
-        parts.append(f"<p class='verdict'>{html.escape(job_verdict(margins, facts['tolerance_mm']))}</p>")
+        parts.append(f"<p class='verdict'>{html.escape(job_verdict(margins, facts))}</p>")
     if demo is not None:
         parts.append(f"<p>{html.escape(_operating_sentence(demo))}</p>")
     speed = margins.limit_speed_rpm if margins is not None and np.isfinite(margins.limit_speed_rpm) else \
@@ -546,7 +609,7 @@ def _job_section(demo: dict | None, margins: Margins | None, search: Search | No
     limit = _limit_sentence(facts, speed, why)
     parts.append(f"<p class='verdict'>{html.escape(limit)}</p>" if margins is None else f"<p>{html.escape(limit)}</p>")
     if margins is not None:
-        parts.append(_margins_table(margins, facts["tolerance_mm"]))
+        parts.append(_margins_table(margins, facts))
     for warning in (demo or {}).get("warnings") or ():
         parts.append(f"<p class='unsafe'>WARNING: {html.escape(str(warning))}</p>")
     if (demo or {}).get("multibody_warning"):
@@ -671,6 +734,13 @@ def _searches(root: Path, runs: list) -> tuple[list, list]:
     return searches, others
 
 
+def _margins_limit_record(root: Path) -> dict | None:
+    """The limit.json `sweep --margins` wrote beside its limit's runs (limit_runs/), read even when
+    no run folder is there (every run came from the stage cache); None in older sweep folders."""
+    path = root / "limit_runs" / "limit.json"
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
 def _plots(images: list, root: Path, heading: str) -> str:
     return f"<h2>{html.escape(heading)}</h2>" + "".join(_image(p, root) for p in images) if images else ""
 
@@ -721,8 +791,8 @@ def read_folder(root: Path) -> Folder:
 def _sections(folder: Folder) -> list:
     """The page's sections in reading order: the job's answer, its own runs, the supporting search."""
     root, is_job = folder.root, folder.is_job
-    sections = [_job_section(folder.demo, folder.margins, folder.searches[0] if folder.searches else None)] \
-        if is_job else []
+    sections = [_job_section(folder.demo, folder.margins, folder.searches[0] if folder.searches else None,
+                             _margins_limit_record(root))] if is_job else []
     sections += [_sweep_section(table) for _, table in folder.sweeps if table is not None]
     run_folders = [run.folder for run in folder.own_runs]
     other_images = [p for p in folder.images if not any(f in p.parents for f in run_folders)]

@@ -44,14 +44,18 @@ def _results(folder, verdict="stick", figures=None, *, amplitude_mm=None, speed_
     return folder / "results.h5"
 
 
-def _margins(path, speeds, amplitudes_mm, limit_mm, limit_speed):
+def _margins(path, speeds, amplitudes_mm, limit_mm, limit_speed, divided_mm=None, bound=None):
+    """/margins as write_margins writes it; without divided_mm as files of before 3efc5ce, whose
+    margins divided the limit."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with h5py.File(path, "w") as file:
         file.attrs.update(fretwork_format="fretwork-sweep", format_version=1)
         group = file.create_group("margins")
         group.attrs.update(limit_mm=limit_mm, limit_speed_rpm=limit_speed, calibration_factor=1.0)
+        if divided_mm is not None:
+            group.attrs.update(margin_amplitude_mm=divided_mm, margin_bound=bound)
         amplitudes = np.asarray(amplitudes_mm)
-        margin = limit_mm / amplitudes
+        margin = (limit_mm if divided_mm is None else divided_mm) / amplitudes
         for name, data in (("speed_rpm", speeds), ("wing_amplitude", amplitudes), ("margin", margin),
                            ("unsafe", margin < 1)):
             group.create_dataset(name, data=data)
@@ -110,7 +114,8 @@ def test_a_demo_page_opens_with_the_jobs_verdict_and_keeps_the_search_runs_subor
 
 
 def test_a_sweep_page_states_the_limit_its_bracket_and_speed_read_off_the_search(tmp_path):
-    """A sweep --margins folder holds no limit.json: the bracket comes from its runs' verdicts."""
+    """A sweep --margins folder of before 3efc5ce holds no limit.json: the bracket comes from its
+    runs' verdicts."""
     job = tmp_path / "sweep"
     _margins(job / "sweep.h5", [600.0, 700.0, 800.0, 900.0], [0.05636, 0.08334, 0.12151, 0.19617], 0.228125, 900.0)
     _search(job / "limit_runs", (50.0, 218.75), (228.125, 237.5))
@@ -133,9 +138,57 @@ def test_the_job_verdict_names_each_unsafe_speed_or_the_smallest_margin():
     assert job_verdict(unsafe).endswith("safe at the others, smallest margin 2.00 at 900 rpm")
     safe = Margins(speeds, amplitudes / 4, 4 * limit / amplitudes, limit, 900.0, 1.0)
     assert job_verdict(safe) == "safe at every speed, smallest margin 2.00 at 600 rpm"
-    # within the limit's tolerance of it: at the limit, not safe
-    assert "at the limit at 700 rpm" in job_verdict(Margins(speeds, np.array([0.1, 0.19, 0.1]), limit / np.array(
-        [0.1, 0.19, 0.1]), limit, 900.0, 1.0), tolerance_mm=0.025)
+    # a file whose margins divide 183.3 µm, the largest amplitude shown to stick: 190 µm is unsafe
+    amplitudes = np.array([0.1, 0.19, 0.1])
+    stuck = Margins(speeds, amplitudes, 0.1833 / amplitudes, limit, 900.0, 1.0, 0.1833, "stuck")
+    assert job_verdict(stuck).startswith("UNSAFE at 700 rpm: margin 0.96 < 1, the wing vibration exceeds 183.3 µm, "
+                                         "the largest amplitude shown to stick")
+
+
+def _sweep_job(tmp_path, amplitudes_mm, record: dict, divided_mm, bound):
+    """A sweep --margins folder as written since 3efc5ce: limit_runs/limit.json, and no run folder
+    (every run of the limit came from the stage cache)."""
+    job = tmp_path / "sweep"
+    _margins(job / "sweep.h5", [600.0, 750.0, 900.0], amplitudes_mm, record["limit_mm"], 900.0, divided_mm, bound)
+    (job / "limit_runs").mkdir()
+    (job / "limit_runs" / "limit.json").write_text(json.dumps(dict(
+        {"tolerance_um": 25.0, "range_um": [100.0, 400.0], "monotone": True, "changes": [], "runs": []}, **record)))
+    return _text(write_report(job))
+
+
+def test_a_sweep_page_reads_the_bracket_and_what_the_margins_divide_from_its_limit_json(tmp_path):
+    text = _sweep_job(tmp_path, [0.1, 0.17, 0.19], {
+        "limit_um": 200.0, "limit_mm": 0.2, "bracket_um": [183.3, 200.0], "margin_amplitude_um": 183.3,
+        "margin_bound": "stuck"}, 0.1833, "stuck")
+    assert ("Amplitude limit 200.0 µm: stuck at 183.3 µm, not stuck at 200.0 µm (searched at 900 rpm, the sweep's "
+            "fastest speed, where the centrifugal load is largest, over 100.0 µm to 400.0 µm, tolerance 25.0 µm)"
+            ) in text
+    # 170 µm lies within the tolerance of the bracket's lower end; 190 µm inside the bracket
+    assert ("UNSAFE at 900 rpm: margin 0.96 < 1, the wing vibration exceeds 183.3 µm, the largest amplitude shown to "
+            "stick; at the limit at 750 rpm") in text
+    assert re.search(r"600 100 1\.83 safe .*750 170 1\.08 at the limit .*900 190 0\.96 unsafe", text)
+    assert "margin = 183.3 µm, the largest amplitude shown to stick / wing amplitude at that speed" in text
+
+
+def test_a_sweep_page_where_nothing_stuck_calls_no_speed_safe(tmp_path):
+    text = _sweep_job(tmp_path, [0.05, 0.08, 0.2], {
+        "limit_um": 100.0, "limit_mm": 0.1, "bracket_um": [None, 100.0], "margin_amplitude_um": 100.0,
+        "margin_bound": "upper bound"}, 0.1, "upper bound")
+    assert ("not shown safe at 600, 750 rpm: nothing in the searched range stuck, the margins are upper bounds"
+            in text)
+    assert "safe at every speed" not in text and "safe at the others" not in text
+    assert re.search(r"600 50 2\.00 not shown safe .*750 80 1\.25 not shown safe .*900 200 0\.50 unsafe", text)
+    assert "The margins are upper bounds: no speed is shown safe." in text
+
+
+def test_an_older_sweep_page_does_not_call_safe_an_amplitude_inside_the_bracket(tmp_path):
+    """Its margins divided the limit (228.1 µm): 220 µm, above the 218.8 µm that stuck, is not safe."""
+    job = tmp_path / "sweep"
+    _margins(job / "sweep.h5", [600.0, 900.0], [0.05636, 0.22], 0.228125, 900.0)
+    _search(job / "limit_runs", (50.0, 218.75), (228.125, 237.5))
+    text = _text(write_report(job))
+    assert "at the limit at 900 rpm" in text and "safe at the others, smallest margin 4.05 at 600 rpm" in text
+    assert "as this older file holds it: inside the limit's bracket a margin of 1 or more is not shown safe" in text
 
 
 def test_a_runs_table_gives_forces_in_kN_its_operating_point_and_when_it_shook_down(tmp_path):
