@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import contextlib
 import io
+import signal
+import threading
 import time as wallclock
 
 import exudyn as exu
@@ -27,6 +29,45 @@ from mbs.items import add_sensors, build_system
 
 class SimulationError(RuntimeError):
     """The time integration of a run failed (Newton did not converge)."""
+
+
+class _Interrupt:
+    """Ctrl-C while exudyn integrates. The interpreter runs the SIGINT handler, which raises
+    KeyboardInterrupt, in the next Python code that runs, and during a solve that is one of the
+    model's user functions; exudyn does not let it through: it turns it into its own ModelError,
+    or takes it for a failed step and retries it with a smaller one (the histories then lose their
+    fixed sample rate). So while the solve runs, the handler is wrapped to record the interrupt
+    first (:meth:`recorded`); :meth:`pre_step`, exudyn's PreStepUserFunction, stops the solve
+    after the step (its False) once one is recorded, and gives the interpreter a place to run the
+    handler once a step in a model without loads; :func:`simulate` raises KeyboardInterrupt when
+    the solve has returned or failed."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def pre_step(self, mbs_, t) -> bool:
+        return not self.requested
+
+    @contextlib.contextmanager
+    def recorded(self):
+        """The SIGINT handler, recording the interrupt before it runs, for the block. Only the
+        main thread has handlers; an ignored or default SIGINT raises nothing and stays as it is."""
+        previous = signal.getsignal(signal.SIGINT)
+        if threading.current_thread() is not threading.main_thread() or not callable(previous):
+            yield
+            return
+
+        def record(signum, frame):
+            self.requested = True
+            previous(signum, frame)
+
+        signal.signal(signal.SIGINT, record)
+        try:
+            yield
+        finally:
+            # a handler that replaced itself (fretwork's ignores a second Ctrl-C) keeps its choice
+            if signal.getsignal(signal.SIGINT) is record:
+                signal.signal(signal.SIGINT, previous)
 
 
 def reduce_bodies(params: ModelParams) -> tuple[ReducedCounterweight, ReducedThrow | None]:
@@ -72,6 +113,8 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight,
     system, mbs, items = build_system(params, reduced, loads=True, initial_modal_coordinates=initial_modal_coordinates,
                                 reduced_throw=reduced_throw)
     sensors = add_sensors(mbs, items, energy)
+    interrupt = _Interrupt()
+    mbs.SetPreStepUserFunction(interrupt.pre_step)
     mbs.Assemble()
 
     solver = params.solver
@@ -91,10 +134,16 @@ def simulate(params: ModelParams, *, reduced: ReducedCounterweight,
     solver_log = io.StringIO()
     started = wallclock.perf_counter()
     try:
-        with contextlib.redirect_stdout(solver_log):
+        with contextlib.redirect_stdout(solver_log), interrupt.recorded():
             converged = mbs.SolveDynamic(settings)
     except exu.SolverError:
         converged = False
+    except Exception:
+        if interrupt.requested:  # exudyn's error around the KeyboardInterrupt of a user function
+            raise KeyboardInterrupt from None
+        raise
+    if interrupt.requested:  # the solve stopped early, or ran on with the interrupt swallowed
+        raise KeyboardInterrupt
     wall_time = wallclock.perf_counter() - started
     if not converged:
         raise SimulationError(f"time integration did not converge at {params.speed_rpm} rpm (time step "

@@ -69,7 +69,6 @@ def run_model(params: ModelParams, out_dir, *, bodies: tuple | None = None, camp
     for row, frequencies in zip(system_frequencies, system):
         row[:len(frequencies)] = frequencies
     campbell = campbell_diagram(reduced, speeds, orders, system_frequencies=system_frequencies)
-    results_file = write_run(out_dir / "run.h5", params, reduced, histories, spectra, campbell)
     shaft_hz = params.speed_rpm / 60.0
     f_max = 1.25 * max(reduced.eigenfrequencies.max(), (orders.max() if orders.size else 0.0) * shaft_hz)
     plots = {
@@ -83,6 +82,8 @@ def run_model(params: ModelParams, out_dir, *, bodies: tuple | None = None, camp
         plots["order_spectrum"] = plot_spectrum(spectra["wing_torsion_orders"], out_dir / "wing_order_spectrum.png",
                                                 xlabel="engine order (cycles per revolution)", title="wing torsion, order spectrum",
                                                 x_max=f_max / shaft_hz)
+    # last: a run interrupted before its end leaves no results file (plots without one are not a result)
+    results_file = write_run(out_dir / "run.h5", params, reduced, histories, spectra, campbell)
     return RunOutputs(histories=histories, reduced=reduced, spectra=spectra, campbell=campbell,
                       results_file=results_file, plots=plots)
 
