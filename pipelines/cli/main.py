@@ -290,9 +290,12 @@ def cmd_reduce(args) -> int:
 
 def _point(text: str) -> list[float]:
     try:
-        return [float(v) for v in text.split(",")]
+        point = [float(v) for v in text.split(",")]
     except ValueError:
         raise InputError(f"--probe {text!r}: give the point as x,y[,z] in mm, e.g. --probe -65,0,0") from None
+    if not all(np.isfinite(point)):
+        raise InputError(f"--probe {text!r}: the coordinates must be finite numbers of mm, e.g. --probe -65,0,0")
+    return point
 
 
 def cmd_study(args) -> int:
@@ -620,28 +623,46 @@ def _check_input(args) -> None:
     # `sweep` ignores --amplitude and --tolerance without --margins (cmd_sweep says so)
     if isinstance(getattr(args, "amplitude", None), str) and getattr(args, "margins", True):
         from pipelines.jobs.limit import check_search, parse_range_um
+        _check_finite_search(args)
         low, high = parse_range_um(args.amplitude)
         if isinstance(getattr(args, "tolerance", None), (int, float)):
             check_search(low, high, 1e-3 * args.tolerance, getattr(args, "grid", 7))
     if isinstance(getattr(args, "speeds", None), str):
         from pipelines.jobs.sweep import parse_speeds
         parse_speeds(args.speeds)
+    for probe in getattr(args, "probe", None) or ():  # `study constant-cof`
+        _point(probe)
+    if getattr(args, "plots", None) is not None:  # `sweep --plots`: its plots are written there after the work
+        from pipelines.output.locks import check_folder
+        check_folder(args.plots, "--plots")
     sizes = _sizes(args.sizes) if isinstance(getattr(args, "sizes", None), str) else None
     if hasattr(args, "cache") and getattr(args, "margins", True):  # `sweep` uses it with --margins only
         _cache(args)
     path = getattr(args, "scene", None)
+    speeds = ()
+    if args.command == "demo":  # the shipped scene, at the demo's speeds
+        from pipelines.jobs.demo import DEFAULT_SCENE, DEMO_SPEEDS_RPM
+        path, speeds = DEFAULT_SCENE, DEMO_SPEEDS_RPM
     if path is None:
         return
+    # a multibody time step that cannot follow a speed's excitation is refused before any work
     if args.command in ("mbs", "sweep"):
         from pipelines.cli.mbs import model_params
         from pipelines.jobs.sweep import check_resolution, parse_speeds
 
         params = model_params(path)  # the whole scene is valid and has an [mbs] table
-        speeds = parse_speeds(args.speeds) if isinstance(getattr(args, "speeds", None), str) else [params.speed_rpm]
-        check_resolution(params, speeds)  # a time step that cannot follow a speed's excitation (warnings: later)
+        speeds = list(parse_speeds(args.speeds)) if args.command == "sweep" else []
+        if args.command == "mbs" or args.margins:  # `sweep --margins` searches the limit at the scene's speed
+            speeds.append(params.speed_rpm)
+        check_resolution(params, speeds)  # its warnings: said as the command runs
         data = scenes.tables(path)
     else:
-        data = scenes.load(path).data
+        from pipelines.cli.mbs import coupled_resolution
+
+        scene = scenes.load(path)
+        for message in coupled_resolution(scene, speeds):
+            _warn(message)
+        data = scene.data
     if sizes is not None:
         from pipelines.studies.convergence import check_levels
         check_levels(path, sizes)  # every size suits the scene's mesh generators
@@ -649,11 +670,38 @@ def _check_input(args) -> None:
         _warn(message)
 
 
+def _check_finite_search(args) -> None:
+    """--amplitude LOW:HIGH and --tolerance as finite numbers: a number is read by float(), which
+    takes 'inf' and 'nan', and NaN passes every comparison of the range and tolerance checks (a
+    search would run at 'nan µm')."""
+    problems = []
+    try:
+        infinite = not all(np.isfinite([float(v) for v in args.amplitude.split(":")]))
+    except ValueError:  # not numbers: parse_range_um says what the form is
+        infinite = False
+    if infinite:
+        problems.append(f"--amplitude {args.amplitude!r}: LOW and HIGH must be finite numbers of µm, e.g. 100:400")
+    tolerance = getattr(args, "tolerance", None)
+    if isinstance(tolerance, (int, float)) and not np.isfinite(tolerance):
+        problems.append(f"--tolerance {tolerance:g}: give the limit's tolerance as a finite width in µm, e.g. 10")
+    if problems:
+        raise InputError("; ".join(problems))
+
+
+def _check_signals(args) -> None:
+    """`export-fmu --signals`: at least one name (an empty word, or commas alone, name none)."""
+    if args.signals is not None and not any(name.strip() for item in args.signals for name in item.split(",")):
+        raise InputError(f"--signals {' '.join(args.signals)!r} names no signal: give the names of signals under "
+                         "/histories of the results file (space or comma separated), or leave --signals out to "
+                         "export them all")
+
+
 def _output(args):
     """The claim on the command's output folder (nullcontext for a command that writes none)."""
     from pipelines.output.locks import PARTIAL, check_folder, claim
 
     if args.command == "export-fmu":
+        _check_signals(args)
         check_folder(Path(args.output).parent, "-o")
         return nullcontext()
     if args.command == "report":  # --out is the HTML file (default: in the results folder)

@@ -52,6 +52,21 @@ def model_params(path) -> ModelParams:
     return multibody_params(scene) if "coupling" in scene.data else load_model_params(path)
 
 
+def coupled_resolution(scene, speeds=()) -> list[str]:
+    """The multibody time step of a scene whose contact run its multibody model drives (a
+    [coupling] table that names no interface-histories file) checked against the excitation
+    (:func:`pipelines.jobs.sweep.check_resolution`) at the scene's speed and ``speeds`` (rpm),
+    before any work: a step that cannot sample it is refused (InputError), the warnings of a coarse
+    one are returned. `run`, `limit`, `demo` and the studies check their scene with it, as `mbs`
+    and `sweep` check theirs; [] for a scene without a multibody model."""
+    from pipelines.coupling import histories_path, multibody_params
+
+    if "coupling" not in scene.data or histories_path(scene) is not None:
+        return []
+    params = multibody_params(scene)
+    return check_resolution(params, [params.speed_rpm, *speeds])
+
+
 def _counterweight(args, params: ModelParams) -> int:
     """The CW whose interface histories `fretwork mbs` writes (checked when they are asked for)."""
     counterweight = args.counterweight

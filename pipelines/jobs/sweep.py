@@ -40,22 +40,41 @@ def sweep_paths(out) -> tuple[Path, Path]:
     return output_paths(out, SWEEP_FILE)
 
 
+#: The most speeds a sweep runs: each is a multibody run of seconds to minutes.
+MAX_SPEEDS = 1000
+
+
 def parse_speeds(text: str) -> np.ndarray:
-    """'500:800:10' -> 500, 510, ..., 800 rpm (end included); '600,650,700' -> a list."""
+    """'500:800:10' -> 500, 510, ..., 800 rpm (end included); '600,650,700' -> a list. At most
+    :data:`MAX_SPEEDS` speeds, counted before the list is made (a tiny step would not fit memory)."""
     try:
         if ":" in text:
             start, stop, step = (float(v) for v in text.split(":"))
-            if step <= 0 or stop < start:
+            if not (step > 0 and stop >= start):  # NaN too
                 raise ValueError
-            speeds = np.arange(start, stop + 0.5 * step, step)
         else:
             speeds = np.asarray([float(v) for v in text.split(",")])
     except ValueError:
         raise InputError(f"speeds {text!r}: use START:STOP:STEP with STEP > 0 and STOP >= START, "
                          "or a comma-separated list (rpm)") from None
+    if ":" in text:
+        finite = np.isfinite([start, stop, step]).all()
+        with np.errstate(over="ignore"):
+            count = np.floor((stop - start) / step + 0.5) + 1.0 if finite else 0.0
+        if count > MAX_SPEEDS:
+            smallest = (stop - start) / (MAX_SPEEDS - 1)
+            digits = 10.0 ** (np.floor(np.log10(smallest)) - 2)  # three significant digits, rounded up
+            amount = f"{count:,.0f}" if count < 1e12 else f"about {count:.2g}" if np.isfinite(count) else "countless"
+            raise InputError(f"speeds {text!r}: {amount} speeds at a step of {step:g} rpm, more than the "
+                             f"{MAX_SPEEDS:,} a sweep runs (each is a multibody run): give a step of at least "
+                             f"{np.ceil(smallest / digits) * digits:.3g} rpm")
+        speeds = np.arange(start, stop + 0.5 * step, step) if finite else np.asarray([start, stop, step])
     wrong = [f"{v:g}" for v in speeds if not (np.isfinite(v) and v > 0.0)]
     if wrong:
         raise InputError(f"speeds {text!r}: engine speeds must be positive and finite (rpm), got {', '.join(wrong)}")
+    if speeds.size > MAX_SPEEDS:
+        raise InputError(f"speeds {text!r}: {speeds.size:,} speeds, more than the {MAX_SPEEDS:,} a sweep runs "
+                         "(each is a multibody run)")
     return speeds
 
 

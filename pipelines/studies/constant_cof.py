@@ -185,6 +185,8 @@ def constant_cof_comparison(scene_path: str | Path, probes: dict, overrides: dic
     if "cof_evolution" not in effects:
         raise InputError(f"{scene_path}: the comparison needs a scene with the 'cof_evolution' effect")
     wrong = wrong_dimension(probes, base.dimension)  # said before the model is built
+    wrong += [f"probe {name} ({','.join(f'{v:g}' for v in given)}) has a coordinate that is not a finite number: "
+              "give it in mm" for name, given in probes.items() if not np.isfinite(np.asarray(given, dtype=float)).all()]
     if wrong:
         raise InputError(f"{scene_path}: " + "; ".join(wrong))
     cof_initial, cof_max = base.data["contact"]["cof_initial"], base.data["contact"]["cof_max"]
