@@ -32,6 +32,11 @@ from contact.verdict import VERDICT_MEANINGS
 from pipelines.output.locks import REPORT_TITLE
 from reduction.errors import InputError
 
+#: the multibody run's file and the plot drawn beside it (mbs.run.run_model), and the plot every
+#: contact run draws in its plots/ folder (pipelines.output.plots)
+MULTIBODY_FILE = "run.h5"
+MULTIBODY_PLOT = "wing_time_history.png"
+RUN_PLOT = "plots/cycles.png"
 PACKAGES = ("fretwork", "numpy", "scipy", "scikit-fem", "exudyn", "h5py", "matplotlib", "meshio", "fmpy")
 #: the folder a limit search writes each amplitude's run into (pipelines.jobs.limit.run_amplitude)
 AMPLITUDE_FOLDER = re.compile(r"amplitude_[0-9.]+um")
@@ -170,11 +175,25 @@ def _effects(scene_toml: str) -> tuple:
         return ()
 
 
+def _open(path: Path) -> h5py.File:
+    """The HDF5 file ``path``, open for reading; a folder in its place, or a file that cannot be
+    read (truncated when its command was killed, emptied, written over), is an InputError naming it."""
+    if path.is_dir():
+        raise InputError(f"{path} is a folder, not a results file: move it away and run the command that writes "
+                         "it again")
+    try:
+        return h5py.File(path, "r")
+    except OSError:
+        raise InputError(f"{path} is damaged ({path.stat().st_size:,} bytes that are not a readable HDF5 file: "
+                         "truncated, or written over): it cannot be reported; run the command that wrote it "
+                         "again") from None
+
+
 def read_run(path: Path) -> Run | None:
     """The contact run of a results file, or None for another fretwork file of that name."""
     from pipelines.jobs.run import _engine_hours
 
-    with h5py.File(path, "r") as file:
+    with _open(path) as file:
         attrs = file.attrs
         if attrs.get("fretwork_format") != "fretwork-results" or "model" in file:  # "model": a multibody run
             return None
@@ -496,7 +515,7 @@ class Margins:
 
 def _read_sweep(path: Path) -> tuple[Margins | None, dict | None]:
     """(its margins or None, the plain multibody sweep's table or None) of a sweep file."""
-    with h5py.File(path, "r") as file:
+    with _open(path) as file:
         if file.attrs.get("fretwork_format") != "fretwork-sweep":
             return None, None
         if "margins" in file and "speed_rpm" in file["margins"]:
@@ -647,9 +666,12 @@ def _sweep_section(table: dict) -> str:
 # ------------------------------------------------------------------------------------ multibody run
 
 def _is_multibody_run(path: Path) -> bool:
-    """Whether an HDF5 file is a multibody run's (``fretwork mbs``: run.h5, or the name --out gave it)."""
+    """Whether an HDF5 file is a multibody run's (``fretwork mbs``: run.h5, or the name --out gave it);
+    a run.h5 that cannot be read is an InputError (:func:`_open`)."""
     if path.name in ("results.h5", "sweep.h5", "checkpoint.h5") or path.name.startswith("interface"):
         return False
+    if path.name == MULTIBODY_FILE:
+        _open(path).close()
     try:
         with h5py.File(path, "r") as file:
             return file.attrs.get("fretwork_format") == "fretwork-results" and "model" in file \
@@ -662,7 +684,7 @@ def _mbs_section(path: Path, root: Path) -> str:
     """A multibody run (``fretwork mbs``): its numbers as the CLI prints them (pipelines.cli.mbs)."""
     from mbs.histories import SETTLED_CHANGE, steady_part, unsettled_change, wing_amplitude
 
-    with h5py.File(path, "r") as file:
+    with _open(path) as file:
         params = json.loads(file["model"].attrs["parameters_json"])
         torsion_hz = float(file["model/eigenfrequencies"][int(file["model"].attrs["torsion_mode"])])
         real_time = float(file["model"].attrs.get("real_time_factor", np.nan))
@@ -757,6 +779,7 @@ class Folder:
     sweeps: list
     demo: dict | None
     images: list
+    missing: list = field(default_factory=list)  # results files missing beside their plots
 
     @property
     def margins(self) -> Margins | None:
@@ -778,21 +801,73 @@ def read_folder(root: Path) -> Folder:
     demo_file = root / "summary.json"
     demo = json.loads(demo_file.read_text()).get("summary") if demo_file.is_file() else None
     images = sorted(root.rglob("*.png"))
-    if not (runs or multibody or sweeps or images or any(root.rglob("limit.json"))):
+    missing = _missing_results(root, multibody)
+    if not (runs or multibody or sweeps or demo or any(root.rglob("limit.json"))):
         unfinished = sorted(root.rglob("results.h5.part"))
         if unfinished:
-            raise InputError(f"{root} holds only {unfinished[0].relative_to(root)}: its run stopped before it "
-                             "finished a cycle (the error it printed says why); nothing converged to report")
-        raise InputError(f"{root} holds no fretwork results (results.h5, summary.json or plots)")
+            raise InputError(_unfinished(root, unfinished[0]))
+        if missing:
+            raise InputError(missing[0])
+        if not images:
+            raise InputError(f"{root} holds no fretwork results (results.h5, summary.json or plots)")
     searches, own_runs = _searches(root, runs)
-    return Folder(root, own_runs, searches, multibody, sweeps, demo, images)
+    return Folder(root, own_runs, searches, multibody, sweeps, demo, images, missing)
+
+
+def _unfinished(root: Path, part: Path) -> str:
+    """Why a folder holds no results but a run's half-written results file ``part`` (written as
+    the run goes, renamed results.h5 at its end), and how to go on: continue the run from its
+    checkpoint (``fretwork run --resume``), or run it again."""
+    folder, name = part.parent, part.relative_to(root)
+    cycles, scene = 0, ""
+    try:
+        if part.stat().st_size:  # else created, nothing written yet
+            with h5py.File(part, "r") as file:
+                cycles = int(file["cycles/cycle"][-1]) if "cycles/cycle" in file and len(file["cycles/cycle"]) else 0
+                scene = str(file.attrs.get("scene_name", ""))
+    except OSError:  # killed while it wrote the file
+        return (f"{root} holds only {name}, which cannot be read: its run was killed while writing it; nothing to "
+                f"report: run it again (fretwork run SCENE --out {folder})")
+    if cycles == 0:
+        return (f"{root} holds only {name}: its run stopped before it finished a cycle (the error it printed says "
+                "why); nothing converged to report")
+    stopped = (f"{root} holds only {name}: the run{f' of scene {scene!r}' if scene else ''} was interrupted after "
+               f"{cycles} cycle{_plural(cycles)}, before it ended: there is no verdict to report yet")
+    checkpoint = folder / "checkpoint.h5"
+    try:
+        h5py.File(checkpoint, "r").close()
+    except OSError:  # none, or damaged
+        damaged = ", and its checkpoint.h5 is damaged" if checkpoint.exists() else ""
+        return f"{stopped}{damaged}; run it again (fretwork run SCENE --out {folder})"
+    return (f"{stopped}; continue it from its checkpoint with fretwork run SCENE --out {folder} --resume (SCENE: "
+            "the scene file it ran, unchanged)")
+
+
+def _missing_results(root: Path, multibody: list) -> list:
+    """A sentence for every run whose plots are in the folder but whose results file is not (removed,
+    or the run was interrupted between its plots and its file): the plots alone are no result."""
+    missing = []
+    for plot in sorted(root.rglob(RUN_PLOT)):
+        folder = plot.parent.parent
+        if not (folder / "results.h5").exists() and not (folder / "results.h5.part").exists():
+            missing.append(f"results.h5 is missing in {folder}: only the plots of its run are there, without the "
+                           "verdict and figures they belong to; run it again (fretwork run SCENE --out "
+                           f"{folder})")
+    for plot in sorted(root.rglob(MULTIBODY_PLOT)):
+        if not any(path.parent == plot.parent for path in multibody):
+            missing.append(f"{MULTIBODY_FILE} is missing in {plot.parent}: only the plots of its multibody run are "
+                           f"there, without the run they belong to; run it again (fretwork mbs SCENE --out "
+                           f"{plot.parent})")
+    return missing
 
 
 def _sections(folder: Folder) -> list:
     """The page's sections in reading order: the job's answer, its own runs, the supporting search."""
     root, is_job = folder.root, folder.is_job
-    sections = [_job_section(folder.demo, folder.margins, folder.searches[0] if folder.searches else None,
-                             _margins_limit_record(root))] if is_job else []
+    sections = [f"<p class='unsafe'>MISSING: {html.escape(sentence)}</p>" for sentence in folder.missing]
+    if is_job:
+        sections.append(_job_section(folder.demo, folder.margins, folder.searches[0] if folder.searches else None,
+                                     _margins_limit_record(root)))
     sections += [_sweep_section(table) for _, table in folder.sweeps if table is not None]
     run_folders = [run.folder for run in folder.own_runs]
     other_images = [p for p in folder.images if not any(f in p.parents for f in run_folders)]
