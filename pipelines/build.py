@@ -88,10 +88,13 @@ def make_mesh(spec: dict, where: str, base: Path | None):
     if "generator" in spec:
         generator = spec["generator"]
         args = {k: v for k, v in spec.items() if k != "generator"}
+        given = ", ".join(f"{key} = {value!r}" for key, value in args.items())
         try:
             return getattr(meshes, generator)(**args), None
-        except TypeError as error:
-            raise InputError(f"'{where}': {error}") from None
+        except TypeError as error:  # an optional key of the wrong type (growth = "fine")
+            raise InputError(f"'{where}' (mesh generator {generator}: {given}): {error}") from None
+        except InputError as error:  # the generator's own geometry rules (scene.checks says the 2D blocks')
+            raise InputError(f"'{where}' (mesh generator {generator}: {given}): {error}") from None
     path = Path(spec["file"])
     if base is not None and not path.is_absolute():
         path = base / path

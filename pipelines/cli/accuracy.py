@@ -29,8 +29,16 @@ def _parse_pairs(items: list[str], option: str) -> dict:
 
 
 def set_overrides(items: list[str]) -> dict:
-    """Scene overrides from ``--set KEY=VALUE`` options: {dotted key: TOML value}."""
-    return {key: _parse_value(value, f"--set {key}") for key, value in _parse_pairs(items, "--set").items()}
+    """Scene overrides from ``--set KEY=VALUE`` options: {dotted key: TOML value}; a KEY that
+    no scene has is said as the option's, with "did you mean" (not as the scene file's)."""
+    from pipelines.scene.schema import unknown_key
+
+    pairs = _parse_pairs(items, "--set")
+    for key in pairs:
+        problem = unknown_key(key)
+        if problem:
+            raise InputError(f"--set {key}: {problem}")
+    return {key: _parse_value(value, f"--set {key}") for key, value in pairs.items()}
 
 
 def cmd_accuracy(args) -> int:

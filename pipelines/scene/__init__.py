@@ -23,7 +23,7 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from pipelines.scene.schema import validate
+from pipelines.scene.schema import unknown_key, validate
 from pipelines.scene.writer import dumps
 from reduction.errors import InputError
 
@@ -51,17 +51,33 @@ class Scene:
         return self.data.get(name, {})
 
 
+#: the byte-order mark Windows editors (Notepad) put before UTF-8 text: no part of the TOML
+BOM = "\ufeff"
+
+
 def parse(text: str, source: str = "scene", path: Path | None = None) -> Scene:
     """Parse and validate TOML text; raises :class:`InputError` listing every problem."""
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text.removeprefix(BOM))
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"{source}: not valid TOML: {error}") from None
-    problems = validate(data, source)
+    _refuse(validate(data, source) or _idle(data), source)
+    return Scene(data, path)
+
+
+def _idle(data: dict) -> list[str]:
+    """A valid scene's procedure that would run no load cycle (:func:`checks.idle_procedure`)."""
+    from pipelines.scene.checks import idle_procedure
+
+    problem = idle_procedure(data)
+    return [problem] if problem else []
+
+
+def _refuse(problems: list[str], source) -> None:
+    """One InputError saying every problem, if there is one."""
     if problems:
         raise InputError(f"{source}: " + ("\n  - ".join([f"{len(problems)} problem(s):"] + problems)
                                           if len(problems) > 1 else problems[0]))
-    return Scene(data, path)
 
 
 #: the keys that say which kind a body's mesh table is: a scene that extends a base and gives a
@@ -123,19 +139,29 @@ def _read(path: Path, seen: tuple = ()) -> dict:
     base's own relative files relative to the base)."""
     if path.is_dir():
         raise InputError(f"scene file {path} is a folder: give a scene file (.toml) in it")
-    if not path.is_file():
+    if not path.exists():
         raise InputError(f"scene file {path} does not exist")
+    if not path.is_file():
+        raise InputError(f"scene file {path} is not a regular file (a device, pipe or socket): give a scene "
+                         "file (.toml)")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8").removeprefix(BOM)
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise InputError(f"{path}: not valid TOML: {error}") from None
     except UnicodeDecodeError:
         raise InputError(f"scene file {path} is not a text file (a scene is TOML text, UTF-8)") from None
     except OSError as error:
         raise InputError(f"scene file {path} cannot be read ({error.strerror})") from None
+    if not data:
+        raise InputError(f"scene file {path} is empty{'' if not text.strip() else ' (comments only)'}: a scene "
+                         "has at least [scene], [materials], [bodies] and [contact] (see examples/)")
     base = data.get("scene", {}).get("base") if isinstance(data.get("scene"), dict) else None
     if base is None:
         return data
+    if not isinstance(base, str):
+        raise InputError(f"{path}: 'scene.base' must be a string, the path of the scene file this one extends "
+                         f"(relative to it), e.g. base = \"cylinder_on_plane.toml\"; got {base!r}")
     base_path = (path.parent / base).resolve()
     if base_path.is_dir() or not base_path.is_file():
         raise InputError(f"{path}: 'scene.base' names {base_path}, which "
@@ -157,12 +183,14 @@ def load(path: str | Path, overrides: dict | None = None) -> Scene:
     {"procedure.wear_cycles": 5, ...} replace values before validation."""
     path = Path(path)
     data = _read(path)
+    for dotted in overrides or {}:
+        problem = unknown_key(dotted)
+        if problem:
+            raise InputError(f"override {dotted} (set on top of {path}): {problem}")
     if overrides:
         apply_overrides(data, overrides)
-    problems = validate(data, str(path))
-    if problems:
-        raise InputError(f"{path}: " + ("\n  - ".join([f"{len(problems)} problem(s):"] + problems)
-                                        if len(problems) > 1 else problems[0]))
+    # a caller that sets the effects builds a model of its own (the validation job's patch tests)
+    _refuse(validate(data, str(path)) or (_idle(data) if "scene.effects" not in (overrides or {}) else []), path)
     return Scene(data, path)
 
 

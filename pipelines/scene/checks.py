@@ -13,11 +13,13 @@ Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
 
 from __future__ import annotations
 
+import inspect
 import math
 
 from contact.procedure import Procedure
 from mbs.scene import mbs_table_problems
 from reduction.errors import listed
+from reduction.mesh import generators
 from reduction.mesh.generators import MAX_GENERATED_NODES, least_nodes
 from pipelines.scene.schema import (
     BODY_LOAD_KEYS,
@@ -29,6 +31,8 @@ from pipelines.scene.schema import (
     PATTERN_KEYS,
     _check_table,
     _suggest,
+    finite,
+    finite_list,
 )
 
 
@@ -48,26 +52,37 @@ def _check_selection(selection, where, dim, problems):
             continue
         if key == "ring":
             ring = selection["ring"]
-            if not (isinstance(ring, dict) and isinstance(ring.get("center"), list) and len(ring["center"]) == dim
+            if not (isinstance(ring, dict) and finite_list(ring.get("center"), dim)
                     and ring.get("axis") in ("x", "y", "z")[:dim]
-                    and isinstance(ring.get("inner_radius"), NUMBER) and isinstance(ring.get("outer_radius"), NUMBER)
+                    and finite(ring.get("inner_radius")) and finite(ring.get("outer_radius"))
                     and 0 <= ring["inner_radius"] < ring["outer_radius"]):
-                problems.append(f"'{where}.ring' needs center ({dim} mm), axis, 0 <= inner_radius < outer_radius (mm)")
+                problems.append(f"'{where}.ring' needs center ({dim} finite numbers, mm), axis, "
+                                "0 <= inner_radius < outer_radius (finite, mm)")
             continue
         if key in ("box", "boxes"):
             boxes = [selection["box"]] if key == "box" else selection["boxes"]
             if not isinstance(boxes, list) or not boxes or not all(
-                    isinstance(box, list) and len(box) == 2 and all(
-                        isinstance(c, list) and len(c) == dim and all(isinstance(v, NUMBER) for v in c) for c in box)
+                    isinstance(box, list) and len(box) == 2 and all(finite_list(c, dim) for c in box)
                     for box in boxes):
                 shape = f"[[min x, y{', z' if dim == 3 else ''}], [max ...]]"
-                problems.append(f"'{where}.{key}' must be {shape if key == 'box' else '[' + shape + ', ...]'} in mm")
+                problems.append(f"'{where}.{key}' must be {shape if key == 'box' else '[' + shape + ', ...]'}: finite "
+                                f"numbers in mm, got {boxes if key == 'boxes' else boxes[0]!r}")
+            else:
+                problems += [f"'{where}.{key}' has its min corner {low} above its max corner {high} in "
+                             f"{listed(['xyz'[i] for i in range(dim) if low[i] > high[i]])}: it selects nothing; "
+                             "give [[min x, y...], [max x, y...]]" for low, high in boxes
+                             if any(lo > hi for lo, hi in zip(low, high))]
         elif key == "axis":
             if selection["axis"] not in ("x", "y", "z")[:dim]:
                 problems.append(f"'{where}.axis' must be one of {('x', 'y', 'z')[:dim]}")
-            if not isinstance(selection.get("value"), NUMBER):
-                problems.append(f"'{where}.value' must be the coordinate (mm) of the plane")
-        elif key not in ("value", "tolerance"):
+            if not finite(selection.get("value")):
+                problems.append(f"'{where}.value' must be the coordinate (mm, a finite number) of the plane, "
+                                f"got {selection.get('value')!r}")
+        elif key == "tolerance":
+            if not (finite(selection["tolerance"]) and selection["tolerance"] >= 0):
+                problems.append(f"'{where}.tolerance' must be a finite number >= 0 (mm), "
+                                f"got {selection['tolerance']!r}")
+        elif key != "value":
             problems.append(f"unknown key '{where}.{key}'{_suggest(key, ['box', 'boxes', 'axis', 'value', 'tolerance'])}")
 
 
@@ -88,6 +103,7 @@ def _check_patterns(data, problems):
                 dof = entry.get("dof", "")
                 if isinstance(dof, str) and dof.count(".") != 2:
                     problems.append(f"'{kind}[{k}].dof' must read 'body.point.component', got {dof!r}")
+    problems += _loaded_and_moved(data)
     for k, entry in enumerate(data.get("body_loads", []) if isinstance(data.get("body_loads", []), list) else []):
         _check_table(entry, BODY_LOAD_KEYS, f"body_loads[{k}]", problems)
         if not isinstance(entry, dict):
@@ -101,11 +117,36 @@ def _check_patterns(data, problems):
             problems.append(f"'body_loads[{k}].body' must name one of the bodies")
         elif "density" not in data.get("materials", {}).get(body.get("material"), {}):
             problems.append(f"'body_loads[{k}]' acts on body '{entry['body']}', whose material has no density")
+        for key in ("acceleration", "angular_velocity", "axis_point"):
+            if key in entry and not finite_list(entry[key]):
+                problems.append(f"'body_loads[{k}].{key}' must be a list of finite numbers, got {entry[key]!r}")
         needed = "acceleration" if entry.get("kind") == "gravity" else "angular_velocity"
         if entry.get("kind") in ("gravity", "centrifugal") and needed not in entry:
             problems.append(f"'body_loads[{k}].{needed}' is missing for a {entry['kind']} load")
     if not names and "coupling" not in data:
         problems.append("the scene has no [[loads]], [[motions]] or [coupling]")
+
+
+def _loaded_and_moved(data) -> list[str]:
+    """A control DOF both loaded (a force, nonzero) and moved (its motion prescribed): the motion
+    decides where it goes, and the force would act on nothing."""
+    def entries(kind):
+        found = data.get(kind, [])
+        return [(k, e) for k, e in enumerate(found) if isinstance(e, dict)] if isinstance(found, list) else []
+
+    moved = {}
+    for k, motion in entries("motions"):
+        if isinstance(motion.get("dof"), str):
+            moved.setdefault(motion["dof"], (k, motion.get("name")))
+    found = []
+    for k, load in entries("loads"):
+        dof, value = load.get("dof"), load.get("value")
+        if isinstance(dof, str) and dof in moved and not (finite(value) and value == 0):
+            m, name = moved[dof]
+            found.append(f"'loads[{k}]' ('{load.get('name')}') acts on '{dof}', a DOF whose motion 'motions[{m}]' "
+                         f"('{name}') prescribes: a DOF is either loaded (a force) or moved (a motion), not both; "
+                         "load another component or drop the motion of this one")
+    return found
 
 
 def _check_effects(data, problems):
@@ -149,10 +190,12 @@ def _check_bodies(data, problems):
                 problems.append(f"'bodies.{name}.mesh.generator' '{generator}' is unknown"
                                 f"{_suggest(generator, MESH_GENERATORS)}")
             else:
-                bad = [key for key in MESH_GENERATORS[generator]
-                       if not isinstance(mesh.get(key), NUMBER) or mesh.get(key) <= 0]
-                problems += [f"'bodies.{name}.mesh.{key}' must be a positive number (mm or count)" for key in bad]
-                if not bad:
+                problems += _generator_key_problems(name, generator, mesh)
+                bad = [key for key in MESH_GENERATORS[generator] if not (finite(mesh.get(key)) and mesh[key] > 0)]
+                problems += [f"'bodies.{name}.mesh.{key}' must be a finite number > 0 (mm or count), got {mesh[key]!r}"
+                             if key in mesh else f"missing key 'bodies.{name}.mesh.{key}' (a finite number > 0, mm "
+                             f"or count) of the mesh generator {generator}" for key in bad]
+                if not bad:  # their order (contact_size <= contact_half_width < half_width) is the generator's
                     problems += _mesh_size_problems(name, mesh)
         elif "file" not in mesh:
             problems.append(f"'bodies.{name}.mesh' needs 'generator' or 'file'")
@@ -182,8 +225,15 @@ def _check_bodies(data, problems):
             else:
                 _check_selection(ref["nodes"], f"{where}.nodes", dim, problems)
             position = ref.get("position")
-            if not (isinstance(position, list) and len(position) == dim):
-                problems.append(f"'{where}.position' must be {dim} coordinates in mm")
+            if not finite_list(position, dim):
+                problems.append(f"'{where}.position' must be {dim} coordinates in mm (finite numbers), got {position!r}")
+
+
+def _generator_key_problems(name: str, generator: str, mesh: dict) -> list[str]:
+    """Keys of a generated mesh that its generator does not take (a typo: 'raduis')."""
+    accepted = list(inspect.signature(getattr(generators, generator)).parameters)
+    return [f"unknown key 'bodies.{name}.mesh.{key}'{_suggest(key, accepted)}: the mesh generator {generator} of "
+            f"body '{name}' takes {listed(accepted)}" for key in mesh if key != "generator" and key not in accepted]
 
 
 def _mesh_size_problems(name: str, mesh: dict) -> list[str]:
@@ -213,13 +263,20 @@ def _check_contact(data, problems):
         if not isinstance(selection.get("body"), str) or selection["body"] not in bodies:
             problems.append(f"'contact.{role}.body' must name one of the bodies ({', '.join(bodies)})")
         _check_selection(selection, f"contact.{role}", dim, problems)
+    if contact["slave"].get("body") == contact["master"].get("body") and contact["slave"].get("body") in bodies:
+        problems.append(f"'contact.slave.body' and 'contact.master.body' select the same body "
+                        f"'{contact['slave']['body']}': the contact is between two bodies; name the other one "
+                        f"({', '.join(b for b in bodies if b != contact['slave']['body']) or 'none defined'}) "
+                        "in one of them")
     if (isinstance(contact["cof_max"], NUMBER) and isinstance(contact["cof_initial"], NUMBER)
             and contact["cof_max"] < contact["cof_initial"]):
         problems.append("'contact.cof_max' must be >= 'contact.cof_initial'")
     wear = contact.get("wear_coefficients", [0.0, 0.0])
-    if len(wear) != 2 or not all(isinstance(w, NUMBER) and w >= 0 for w in wear):
-        problems.append("'contact.wear_coefficients' must be two non-negative numbers [slave, master], mm²/N")
-    if "wear" in scene["effects"] and not any(wear):
+    if not (finite_list(wear, 2) and all(w >= 0 for w in wear)):
+        problems.append(f"'contact.wear_coefficients' must be two finite numbers >= 0 [slave, master], mm²/N, "
+                        f"got {wear!r}")
+        wear = None  # said above: whether it is zero is no question
+    if "wear" in scene["effects"] and wear is not None and not any(wear):
         problems.append("effect 'wear' is listed but 'contact.wear_coefficients' are zero or missing")
     if "cof_evolution" in scene["effects"] and not contact.get("cof_rate"):
         problems.append("effect 'cof_evolution' is listed but 'contact.cof_rate' is zero or missing")
@@ -234,8 +291,8 @@ def _check_bolts(data, problems):
     dim = data["scene"]["dimension"]
     for name, bolt in bolts.items():
         axis = bolt["axis"]
-        if len(axis) != dim or not all(_number(a) for a in axis) or not any(axis):
-            problems.append(f"'bolts.{name}.axis' must be a nonzero vector of {dim} numbers")
+        if not finite_list(axis, dim) or not any(axis):
+            problems.append(f"'bolts.{name}.axis' must be a nonzero vector of {dim} finite numbers, got {axis!r}")
             axis = None
         elif not abs(math.hypot(*axis) - 1.0) <= _UNIT_TOLERANCE:  # not: a NaN component is no unit vector
             problems.append(f"'bolts.{name}.axis' = {axis} has length {math.hypot(*axis):g}: it must be a unit "
@@ -389,6 +446,8 @@ def _check_support(data, problems):
     Necessary, not sufficient (a support of one component leaves the others free): run before any
     mesh is built, it gives the earlier message; :mod:`pipelines.support` checks every rigid mode
     once the selections are resolved to DOFs."""
+    if data["contact"]["slave"].get("body") == data["contact"]["master"].get("body"):
+        return  # _check_contact says so: the bodies are not joined as the scene means them to be
     translations = ("ux", "uy", "uz")[:data["scene"]["dimension"]]
     motions = [str(entry.get("dof", "")).split(".") for entry in data.get("motions", [])
                if isinstance(entry, dict)] if isinstance(data.get("motions", []), list) else []
@@ -409,15 +468,39 @@ def _check_support(data, problems):
 
 def _check_procedure(data, problems):
     procedure = data.get("procedure", {})
-    cycles = [procedure.get(key, getattr(Procedure, key)) for key in ("cof_cycles", "wear_cycles")]
-    if all(isinstance(n, int) and n == 0 for n in cycles):
+    cof_cycles, wear_cycles = (procedure.get(key, getattr(Procedure, key)) for key in ("cof_cycles", "wear_cycles"))
+    if all(isinstance(n, int) and n == 0 for n in (cof_cycles, wear_cycles)):
         problems.append("'procedure.cof_cycles' and 'procedure.wear_cycles' are both 0 (or not given): the "
                         "run would end after the preload with no load cycle to judge; set cof_cycles (COF "
                         "stabilisation cycles) or wear_cycles (wear cycles) to at least 1")
+
     run_up, cof_cycles = procedure.get("vibration_run_up", 0), procedure.get("cof_cycles", 0)
     if isinstance(run_up, int) and isinstance(cof_cycles, int) and run_up > cof_cycles:
         problems.append(f"'procedure.vibration_run_up' ({run_up}) must not exceed 'procedure.cof_cycles' "
                         f"({cof_cycles}): the vibration runs up within the COF phase")
+
+
+def idle_procedure(data) -> str | None:
+    """Why a valid scene would run no load cycle: no COF cycles, and wear cycles without the
+    effect "wear" that runs them (the run would end after the preload with nothing to judge);
+    None when it runs one. Not part of :func:`pipelines.scene.schema.validate`: a model that is
+    only built (the validation job's patch tests set 'scene.effects' = [] on a wear scene) is
+    sound; :func:`pipelines.scene.load` asks it of every scene whose effects it did not set."""
+    procedure = data.get("procedure", {})
+    cof_cycles, wear_cycles = (procedure.get(key, getattr(Procedure, key)) for key in ("cof_cycles", "wear_cycles"))
+    effects = _effects(data)
+    if cof_cycles != 0 or not (isinstance(wear_cycles, int) and wear_cycles > 0) or effects is None or "wear" in effects:
+        return None
+    return (f"'procedure.cof_cycles' is 0 and the wear phase ('procedure.wear_cycles' = {wear_cycles}) runs only "
+            f"with \"wear\" in 'scene.effects', which lists {effects or 'no effect'}: the run would end after the "
+            "preload with no load cycle to judge; add \"wear\" to 'scene.effects', or set cof_cycles to at least 1")
+
+
+def _effects(data) -> list | None:
+    """The scene's effects, None when [scene] gives no list of them (the schema says so)."""
+    scene = data.get("scene")
+    effects = scene.get("effects") if isinstance(scene, dict) else None
+    return effects if isinstance(effects, list) else None
 
 
 def _check_mbs(data, problems):
@@ -441,10 +524,13 @@ SEMANTIC_CHECKS = ((_check_effects, ("scene", "materials", "bodies", "coupling")
 # (the scene still runs), naming the key and the unit it was probably written in.
 _METAL_DENSITY = 1.5e-9  # t/mm³: lighter than any structural metal (magnesium 1.7e-9)
 _METAL_NAMES = ("steel", "iron", "alumin", "titan", "copper", "brass", "bronze", "metal", "nickel")
+#: materials named so may be softer than 1 GPa (E of rubber ~5 MPa, PTFE ~500 MPa): no unit warning
+_SOFT_NAMES = ("rubber", "elastomer", "polymer", "plastic", "gasket", "ptfe", "nylon", "epoxy", "foam", "silicone")
 
 
 def _number(value) -> bool:
-    return isinstance(value, NUMBER) and not isinstance(value, bool)
+    """A number to judge: finite (the schema refuses the others, and they have no unit)."""
+    return finite(value)
 
 
 #: Engine speeds (rpm) outside this band are most likely written in another unit. The slowest
@@ -561,9 +647,14 @@ def _material_warnings(name, material) -> list[str]:
     where = f"materials.{name}"
     modulus, density = material.get("youngs_modulus"), material.get("density")
     metal = (_number(density) and density >= _METAL_DENSITY) or any(m in name.lower() for m in _METAL_NAMES)
+    soft = any(m in name.lower() for m in _SOFT_NAMES)
     if _number(modulus) and 0 < modulus < 1000.0 and metal:
         found.append(f"'{where}.youngs_modulus' = {modulus:g} MPa is below 1,000 MPa for a metal: probably GPa "
                      f"(MPa expected: {modulus:g} GPa is {1e3 * modulus:g} MPa)")
+    elif _number(modulus) and 0 < modulus < 1000.0 and not soft:
+        found.append(f"'{where}.youngs_modulus' = {modulus:g} MPa is below 1,000 MPa, softer than any metal or "
+                     f"engineering solid of a bolted joint: looks like GPa (MPa expected: {modulus:g} GPa is "
+                     f"{1e3 * modulus:g} MPa)")
     elif _number(modulus) and modulus > 1e7:
         found.append(f"'{where}.youngs_modulus' = {modulus:g} MPa is above any solid's: probably Pa "
                      f"(MPa expected: {modulus:g} Pa is {1e-6 * modulus:g} MPa)")
@@ -572,6 +663,74 @@ def _material_warnings(name, material) -> list[str]:
             found.append(f"'{where}.density' = {density:g} t/mm³ is far heavier than any solid: probably {unit} "
                          f"(t/mm³ expected: {density:g} {unit} is {scale * density:g} t/mm³)")
             break
+    return found
+
+
+#: γ_crit, the reversible micro-slip before sliding, is 0.5-10 µm for metal contacts (the shipped
+#: scenes 1 µm): above this (mm) it is most likely typed in µm
+LARGEST_CRITICAL_SLIP_MM = 0.05
+#: kn, the contact layer's penalty stiffness (N/mm³): the shipped scenes use 1e6-4e6 (1e5-1e7 is
+#: the range of metal joints' interface stiffness per mm of overclosure); far outside this band it
+#: is most likely in another unit, or would let the bodies sink into each other (below) or stiffen
+#: the Newton iterations beyond use (above)
+NORMAL_STIFFNESS_BAND = (1e2, 1e10)
+
+
+def _normal_stiffness_warnings(stiffness) -> list[str]:
+    low, high = NORMAL_STIFFNESS_BAND
+    if not _number(stiffness) or low <= stiffness <= high or stiffness <= 0:
+        return []
+    said = f"'contact.normal_stiffness' = {stiffness:g} N/mm³ is "
+    if stiffness < low:
+        return [said + f"below {low:g} N/mm³, where metal joints' contact layers are 1e5 to 1e7 N/mm³ stiff (a "
+                "pressure of 100 MPa would press them 1 mm or more into each other): check the unit (N/mm³ = "
+                f"MPa/mm; 1 MPa/µm and 1 GPa/mm are 1000 N/mm³; {stiffness:g} MN/mm³ is {1e6 * stiffness:g} N/mm³)"]
+    return [said + f"above {high:g} N/mm³, where metal joints' contact layers are 1e5 to 1e7 N/mm³ stiff: "
+            f"probably N/m³ (N/mm³ expected: {stiffness:g} N/m³ is {1e-9 * stiffness:g} N/mm³)"]
+
+
+#: keys that act only with an effect of 'scene.effects' (table, key); set to other than their
+#: default without it, they are most likely meant to act
+EFFECT_KEYS = {
+    "cof_evolution": (("contact", "cof_rate"), ("procedure", "cof_during_wear"), ("procedure", "cof_jump")),
+    "wear": (("contact", "wear_coefficients"), ("contact", "wear_form"), ("contact", "pressure_limit"),
+             ("procedure", "wear_cycles"), ("procedure", "cycle_jump"), ("procedure", "jump_tolerance"),
+             ("procedure", "max_cycle_jump"), ("procedure", "life_cycles"), ("procedure", "wear_cap")),
+    "bolts": (("procedure", "clamp_loss_limit"), ("procedure", "loosening_window"),
+              ("procedure", "loosening_window_cycles"), ("procedure", "stop_at_loosening")),
+}
+#: the defaults of the EFFECT_KEYS that are not fields of Procedure (contact.law.ContactLaw's, the wear cap's)
+_EFFECT_KEY_DEFAULTS = {"cof_rate": 0.0, "wear_coefficients": [0.0, 0.0], "wear_form": "pressure",
+                        "pressure_limit": 0.0, "wear_cap": math.inf}
+_EFFECT_DOES = {"cof_evolution": "the COF stays at 'contact.cof_initial'",
+                "wear": "no wear is computed and the wear phase does not run",
+                "bolts": "without bolts there is no clamp force whose loss is loosening"}
+
+
+def _inactive_effect_warnings(data: dict) -> list[str]:
+    """Keys of an effect that 'scene.effects' does not list, set as if it did: they do nothing.
+    Reads unvalidated tables safely."""
+    effects = _effects(data)
+    if effects is None:
+        return []
+    found = []
+    for effect, keys in EFFECT_KEYS.items():
+        if effect in effects:
+            continue
+        tables = {name: data.get(name) if isinstance(data.get(name), dict) else {} for name in ("contact", "procedure")}
+        set_keys = [(table, key) for table, key in keys if key in tables[table]
+                    and tables[table][key] != _EFFECT_KEY_DEFAULTS.get(key, getattr(Procedure, key, None))]
+        contact = tables["contact"]
+        if (effect == "cof_evolution" and _number(contact.get("cof_max")) and _number(contact.get("cof_initial"))
+                and contact["cof_max"] > contact["cof_initial"]):
+            set_keys.insert(0, ("contact", "cof_max"))
+        if not set_keys:
+            continue
+        said = listed([f"'{table}.{key}' = {tables[table][key]!r}" for table, key in set_keys])
+        found.append(f"{said} {'acts' if len(set_keys) == 1 else 'act'} only with the effect \"{effect}\", which "
+                     f"'scene.effects' does not list ({effects or 'no effect'}): {_EFFECT_DOES[effect]}, and "
+                     f"{'it does' if len(set_keys) == 1 else 'they do'} nothing; add \"{effect}\" to 'scene.effects', "
+                     f"or remove {'it' if len(set_keys) == 1 else 'them'}")
     return found
 
 
@@ -604,6 +763,12 @@ def plausibility(data: dict) -> list[str]:
     if _number(slip) and slip > 1.0:
         found.append(f"'contact.critical_slip' = {slip:g} mm is larger than 1 mm: probably µm "
                      f"(mm expected: {slip:g} µm is {1e-3 * slip:g} mm)")
+    elif _number(slip) and slip > LARGEST_CRITICAL_SLIP_MM:
+        found.append(f"'contact.critical_slip' = {slip:g} mm is above {LARGEST_CRITICAL_SLIP_MM:g} mm, where γ_crit, "
+                     f"a micro-slip, is typically 0.5 to 10 µm: probably µm (mm expected: {slip:g} µm is "
+                     f"{1e-3 * slip:g} mm)")
+    found += _normal_stiffness_warnings(table("contact").get("normal_stiffness"))
+    found += _inactive_effect_warnings(data)
     for name, bolt in table("bolts").items():
         pretension = bolt.get("pretension") if isinstance(bolt, dict) else None
         stiffness = bolt.get("stiffness") if isinstance(bolt, dict) else None

@@ -10,6 +10,7 @@ Units: mm, N, MPa, t, s, mJ (see the README's scene reference).
 from __future__ import annotations
 
 import difflib
+import math
 
 
 CONTACT_EFFECTS = ("cof_evolution", "wear", "bolts")
@@ -31,6 +32,21 @@ MESH_GENERATORS = {
     "web_block": ("width", "depth", "thickness", "hub_width", "screw_x", "hole_half_size", "hole_depth",
                   "contact_size"),
 }
+
+
+NUMBER = (int, float)
+
+
+def finite(value) -> bool:
+    """Whether ``value`` is a finite number (not a boolean, NaN or ±inf): what every numeric
+    scene value must be, in tables and in arrays alike, unless its key is :data:`UNBOUNDED`."""
+    return isinstance(value, NUMBER) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def finite_list(value, length: int | None = None) -> bool:
+    """Whether ``value`` is a list of finite numbers (of ``length`` of them, if given)."""
+    return (isinstance(value, list) and (length is None or len(value) == length)
+            and all(finite(entry) for entry in value))
 
 
 def _positive(value):
@@ -69,7 +85,6 @@ def _field_output(value):
     return f"must hold cycle fractions in (0, 1] (0.25: a quarter into the cycle), not {wrong}" if wrong else None
 
 
-NUMBER = (int, float)
 # key → (types, required, check, meaning with units). "*" marks a table of named entries.
 SCHEMA = {
     "scene": {
@@ -145,8 +160,9 @@ SCHEMA = {
         "jump_tolerance": (NUMBER, False, lambda v: None if 0 < v <= 0.5 else "must lie in (0, 0.5]",
                            "adaptive jump: largest pressure change per block / mean pressure"),
         "max_cycle_jump": (NUMBER, False, lambda v: None if v >= 1 else "must be >= 1",
-                           "adaptive jump: the largest J"),
-        "life_cycles": (NUMBER, False, _positive, "real cycles the wear phase stands for at most"),
+                           "adaptive jump: the largest J (default inf: no limit)"),
+        "life_cycles": (NUMBER, False, _positive,
+                        "real cycles the wear phase stands for at most (default inf: no limit)"),
         "cof_during_wear": (bool, False, None, "keep COF evolving in the wear phase"),
         "cof_jump": (bool, False, None, "scale the wear phase's COF change by the cycle jump, as its wear (default true)"),
         "vibration_run_up": (int, False, _integer_at_least(0),
@@ -168,6 +184,11 @@ SCHEMA = {
         "checkpoint_every": (int, False, _integer_at_least(0), "write checkpoint.h5 every n cycles (0: never)"),
     },
 }
+
+
+#: keys whose value may be inf, where it means "no limit" (their default); every other number
+#: must be finite (an infinite stiffness, modulus, load or jump is no model)
+UNBOUNDED = frozenset({"procedure.max_cycle_jump", "procedure.life_cycles"})
 
 
 PATTERN_KEYS = {
@@ -228,15 +249,71 @@ def _check_table(table, schema, where, problems) -> bool:
             sound = sound and types is NUMBER
             continue
         if not isinstance(value, types):
-            expected = types.__name__ if isinstance(types, type) else "number"
-            problems.append(f"'{where}.{key}' must be a {expected} ({meaning}), got {value!r}")
+            expected = _type_name(types)
+            problems.append(f"'{where}.{key}' must be {expected} ({meaning}), got {value!r}")
             sound = sound and types is NUMBER
+            continue
+        if isinstance(value, float) and not math.isfinite(value) and not (
+                value == math.inf and f"{where}.{key}" in UNBOUNDED):
+            # a key that also takes words or lists (cycle_jump = "auto") says its own alternatives
+            said = check(value) if check is not None and types not in (NUMBER, float) else None
+            problems.append(f"'{where}.{key}' {said or _finite_requirement(check)} ({meaning}), got {value!r}")
             continue
         if check is not None:
             message = check(value)
             if message:
                 problems.append(f"'{where}.{key}' {message} ({meaning}), got {value!r}")
     return sound
+
+
+_TYPE_NAMES = {int: "an integer", float: "a number", str: "a string", bool: "true or false", list: "a list",
+               dict: "a table"}
+
+
+def _type_name(types) -> str:
+    """'a number', 'a table or a list': what a key of ``types`` must be, in words."""
+    if types == NUMBER or not isinstance(types, tuple):
+        return _TYPE_NAMES.get(types, "a number")
+    names = ["a number"] if set(NUMBER) <= set(types) else []
+    names += [_TYPE_NAMES[t] for t in types if t not in NUMBER or not names]
+    return " or ".join(names)
+
+
+def _finite_requirement(check) -> str:
+    """'must be a finite number > 0': the finiteness every number needs, with what ``check``
+    asks (said as it refuses NaN, which no range holds)."""
+    asked = check(math.nan) if check is not None else None
+    if not asked:
+        return "must be a finite number"
+    if asked.startswith("must be "):
+        return "must be a finite number " + asked.removeprefix("must be ")
+    return "must be a finite number and " + asked.removeprefix("must ")
+
+
+#: arrays of tables and the keys of their entries
+ENTRY_KEYS = {"loads": PATTERN_KEYS, "motions": PATTERN_KEYS, "body_loads": BODY_LOAD_KEYS}
+
+
+def unknown_key(dotted: str) -> str | None:
+    """Why the dotted key of an override ("procedure.cof_cycles", "bodies.plane.mesh.contact_size",
+    "motions.0.value") names no key a scene has, with "did you mean"; None when it may name one.
+    Below a key whose value is a table of free form (a mesh, a selection) and in [mbs] (its own
+    module's keys) anything goes: validation judges the scene it makes."""
+    keys = dotted.split(".")
+    if keys[0] not in TOP_LEVEL:
+        return f"a scene has no table '{keys[0]}'{_suggest(keys[0], TOP_LEVEL)}"
+    if keys[0] in SCHEMA:
+        schema, depth = SCHEMA[keys[0]], 1
+    elif f"{keys[0]}.*" in SCHEMA:
+        schema, depth = SCHEMA[f"{keys[0]}.*"], 2
+    elif keys[0] in ENTRY_KEYS:
+        schema, depth = ENTRY_KEYS[keys[0]], 2
+    else:
+        return None
+    if len(keys) <= depth or keys[depth] in schema:
+        return None
+    table = ".".join(keys[:depth])
+    return f"'{table}' has no key '{keys[depth]}'{_suggest(keys[depth], schema)}"
 
 
 def _misplaced_base(data: dict) -> str:

@@ -27,7 +27,10 @@ def graded_coordinates(fine_half_width: float, fine_size: float, total_half_widt
     All lengths in mm. The last interval is stretched to end exactly at total_half_width.
     """
     if not 0 < fine_size <= fine_half_width < total_half_width:
-        raise InputError("graded mesh needs 0 < fine size <= fine half-width < total half-width")
+        raise InputError(f"a graded mesh needs 0 < fine size <= fine half-width < total half-width, got fine "
+                         f"size {fine_size:g}, fine half-width {fine_half_width:g} and total half-width "
+                         f"{total_half_width:g} mm (contact_size, contact_half_width and the block's half-width, "
+                         f"depth or height)")
     n_fine = max(1, int(round(fine_half_width / fine_size)))
     inner = np.linspace(0.0, fine_half_width, n_fine + 1)
     outer, x, h = [], fine_half_width, fine_size
@@ -48,9 +51,23 @@ def one_sided_coordinates(fine_depth: float, fine_size: float, total_depth: floa
     return full[full >= 0.0]
 
 
+def _check_contact_zone(contact_size: float, contact_half_width: float, **outer: float) -> None:
+    """A 2D block's graded zone, elements of ``contact_size`` over ±``contact_half_width``, lies
+    inside the block (``outer``: its half-width and its depth or height), said by the keys' names."""
+    if contact_size > contact_half_width:
+        raise InputError(f"contact_size ({contact_size:g} mm) must not exceed contact_half_width "
+                         f"({contact_half_width:g} mm): the contact zone ±contact_half_width is meshed with "
+                         "elements of contact_size")
+    for key, length in outer.items():
+        if contact_half_width >= length:
+            raise InputError(f"contact_half_width ({contact_half_width:g} mm) must be smaller than {key} "
+                             f"({length:g} mm): the refined contact zone lies inside the block")
+
+
 def plane_block(half_width: float, depth: float, contact_half_width: float, contact_size: float,
                 growth: float = 1.25) -> skfem.MeshQuad:
     """2D rectangle x ∈ [−half_width, half_width], y ∈ [−depth, 0]; contact face at y = 0."""
+    _check_contact_zone(contact_size, contact_half_width, half_width=half_width, depth=depth)
     x = graded_coordinates(contact_half_width, contact_size, half_width, growth)
     y = -one_sided_coordinates(contact_half_width, contact_size, depth, growth)[::-1]
     return skfem.MeshQuad.init_tensor(x, y)
@@ -63,7 +80,10 @@ def cylinder_block(radius: float, half_width: float, height: float, contact_half
     The bottom follows y = R − √(R² − x²); the top face is where a reference point is coupled.
     """
     if half_width >= radius:
-        raise InputError("cylinder block half-width must be smaller than the radius")
+        metres = f"; if the radius was meant in metres, write {1e3 * radius:g}" if 1e3 * radius > half_width else ""
+        raise InputError(f"half_width ({half_width:g} mm) must be smaller than radius ({radius:g} mm): the block is "
+                         f"the lower part of the cylinder, narrower than it{metres}")
+    _check_contact_zone(contact_size, contact_half_width, half_width=half_width, height=height)
     x = graded_coordinates(contact_half_width, contact_size, half_width, growth)
     eta = one_sided_coordinates(contact_half_width, contact_size, height, growth) / height
     mesh = skfem.MeshQuad.init_tensor(x, eta)
@@ -146,10 +166,11 @@ def _plan_with_hole(length: float, width: float, hole_x: float, hole_radius: flo
     half_cells = width / (2.0 * size)
     block_cells = block_half / size
     if abs(half_cells - round(half_cells)) > 1e-9 or abs(block_cells - round(block_cells)) > 1e-9:
-        raise InputError("beam mesh: half the width and the hole block half-size must be multiples "
-                         "of the contact element size")
+        raise InputError(f"beam mesh: half the width ({width / 2:g} mm) and the hole block half-size "
+                         f"({block_half:g} mm) must be multiples of the contact element size ({size:g} mm)")
     if not hole_radius < block_half <= width / 2:
-        raise InputError("beam mesh: the hole must fit inside its block, and the block inside the width")
+        raise InputError(f"beam mesh: the hole (radius {hole_radius:g} mm) must fit inside its block (half-size "
+                         f"{block_half:g} mm), and the block inside the width ({width:g} mm)")
     n_fine = int(round((fine_to - fine_from) / size))
     fine = hole_x + size * np.arange(int(round((fine_from - hole_x) / size)),
                                      int(round((fine_from - hole_x) / size)) + n_fine + 1)
@@ -231,7 +252,7 @@ def beam_with_hole(length: float, width: float, thickness: float, hole_x: float,
     recessed by ``gap`` (mm), so the bolted pad is the contact interface.
     """
     if side not in ("lower", "upper"):
-        raise InputError("beam side must be 'lower' or 'upper'")
+        raise InputError(f"beam side must be 'lower' or 'upper', got {side!r}")
     block_half = block_half or contact_size * np.ceil((hole_radius + 2.5 * contact_size) / contact_size)
     plan, quads = _plan_with_hole(length, width, hole_x, hole_radius, contact_size,
                                   hole_x - pad_half_length - 2 * contact_size,
@@ -351,8 +372,8 @@ def _hub_lines(width: float, hub_width: float, screw_x: float, hole_half_size: f
     breaks they keep and their fine intervals: (lines, breaks, fine intervals)."""
     half_hub = 0.5 * hub_width
     if not 0.0 <= relief_half_width < screw_x - hole_half_size:
-        raise InputError("relief_half_width must be >= 0 and leave the screw holes on the pads "
-                         "(relief_half_width < screw_x − hole_half_size)")
+        raise InputError(f"relief_half_width ({relief_half_width:g} mm) must be >= 0 and leave the screw holes on "
+                         f"the pads (relief_half_width < screw_x − hole_half_size = {screw_x - hole_half_size:g} mm)")
     holes_x = [s * screw_x + d * hole_half_size for s in (-1, 1) for d in (-1, 1)]
     fine = [(-half_hub, half_hub)]
     if relief_half_width > 0:
@@ -415,8 +436,11 @@ def counterweight_block(width: float, height: float, thickness: float, hub_width
     """
     if not (0 < hub_width < width and 0 < hub_height < height and
             hole_half_size < screw_x < 0.5 * hub_width - hole_half_size and 2 * hole_half_size < thickness):
-        raise InputError("counterweight_block: needs hub_width < width, hub_height < height and the screw "
-                         "holes inside the hub face (hole_half_size < screw_x < hub_width/2 − hole_half_size)")
+        raise InputError(f"counterweight_block: needs hub_width < width ({hub_width:g}, {width:g} mm), hub_height < "
+                         f"height ({hub_height:g}, {height:g} mm), the screw holes inside the hub face (hole_half_size "
+                         f"< screw_x < hub_width/2 − hole_half_size: {hole_half_size:g} < {screw_x:g} < "
+                         f"{0.5 * hub_width - hole_half_size:g} mm) and 2 × hole_half_size < thickness "
+                         f"({2 * hole_half_size:g}, {thickness:g} mm)")
     coarse = _far_size(contact_size, coarse_size)
     half_t = 0.5 * thickness
     x, keep_x, fine_x = _hub_lines(width, hub_width, screw_x, hole_half_size, relief_half_width, contact_size, coarse)
@@ -442,7 +466,8 @@ def web_block(width: float, depth: float, thickness: float, hub_width: float, sc
     at x = ±screw_x. Its face y = 0 matches :func:`counterweight_block` on the hub (same lines,
     same grading: give both the same contact_size, coarse_size and relief_half_width)."""
     if not (hub_width <= width and hole_depth < depth):
-        raise InputError("web_block: needs hub_width <= width and hole_depth < depth")
+        raise InputError(f"web_block: needs hub_width <= width ({hub_width:g}, {width:g} mm) and hole_depth < depth "
+                         f"({hole_depth:g}, {depth:g} mm)")
     coarse = _far_size(contact_size, coarse_size)
     half_t = 0.5 * thickness
     x, keep_x, fine_x = _hub_lines(width, hub_width, screw_x, hole_half_size, relief_half_width, contact_size, coarse)
