@@ -16,13 +16,20 @@
   modification time and size, its path relative to the folder). A file is fretwork's when the
   manifest lists it and it is unchanged since (a file the user wrote over is not), or when it
   says so itself: an HDF5 file whose root attribute ``fretwork_format`` starts with "fretwork-"
-  (results, checkpoint, multibody and sweep files), an HDF5 file named ``*.part`` that cannot be
-  read (a results file half-written when its run was killed), or a page of ``fretwork report``. Where the
+  (results, checkpoint, multibody and sweep files), a file named ``*.part`` or ``checkpoint.h5``
+  that is empty or an HDF5 file that cannot be read (a results file half-written when its run was
+  killed, a checkpoint truncated after it was written: fretwork's names, nothing in them readable),
+  or a page of ``fretwork report``. Where the
   command writes, a file that is not fretwork's is never removed: the command is refused, naming
   the files and the way out (another folder, or remove them yourself);
-- the outputs an earlier run of the command left there are then removed, said in one note line,
-  so that old plots never stand beside new ones; only once the command's input has been
-  checked (``ready``): a refused input loses nothing;
+- the outputs an earlier run of the command left there are then set aside (moved into
+  ``.fretwork-earlier`` in the folder), once the command's input has been checked (``ready``).
+  They are removed, said in one note line, when the command ends having written outputs of its
+  own, so that old plots never stand beside new ones; a command that fails before it wrote any
+  (an input refused only as the command runs: a scene that does not mesh or build, a selection
+  that finds nothing, a cluster option, a checkpoint that cannot be resumed) puts them back: a
+  refused input loses nothing. Outputs set aside by a command that was killed are put back by
+  the next claim of the folder, unless the killed command had written outputs of its own;
 - when the command is interrupted (Ctrl-C), its half-written files (``*.part``, ``*.tmp``
   written since the claim) go;
 - when the command fails, the folders the claim created are removed again if they are empty:
@@ -52,6 +59,13 @@ SYSTEM_FOLDERS = tuple(Path(p) for p in ("/proc", "/sys", "/dev", "/usr", "/etc"
 #: Folders that hold other folders: a place for results may lie below them, never be one of them
 #: (the user's home is one too, see :func:`_shared_folders`).
 SHARED_FOLDERS = tuple(Path(p) for p in ("/", "/var", "/root", "/home"))
+#: Where a claim keeps the outputs an earlier run left in the folder until the command has
+#: written its own (then they are removed) or has failed without writing any (then they go back).
+EARLIER_NAME = ".fretwork-earlier"
+#: Names of files only fretwork writes where its commands write, which are fretwork's even when
+#: damaged (empty, or HDF5 that cannot be read): a run's half-written results file and its
+#: checkpoint; a new run replaces them (--resume says the checkpoint is damaged).
+DAMAGED_OURS = ("*.part", "checkpoint.h5")
 #: Half-written files, removed when a command is interrupted: a results file being written
 #: (results.h5.part: the run's whole files are its results.h5 and checkpoint.h5) and the
 #: temporary files of atomic writes.
@@ -221,6 +235,8 @@ def _says_fretwork(path: Path) -> bool:
             head = stream.read(1024)
     except OSError:
         return False
+    if not head:
+        return _damaged_ours(path)  # a checkpoint emptied: nothing in it to lose
     if head.startswith(_HDF5_SIGNATURE):
         import h5py
 
@@ -228,12 +244,16 @@ def _says_fretwork(path: Path) -> bool:
             with h5py.File(path, "r") as file:
                 tag = file.attrs.get("fretwork_format", "")
         except (OSError, KeyError, ValueError):
-            # a damaged file proves nothing, but for the half-written results file of a run
-            # killed in the middle of a write (results.h5.part: the name of fretwork's
-            # half-written files, HDF5 by its signature), which its --resume must take over
-            return path.name.endswith(".part")
+            # a damaged file proves nothing, but for fretwork's own names: the half-written
+            # results file of a run killed in the middle of a write, which its --resume must
+            # take over, and a checkpoint truncated after it was written, which a new run replaces
+            return _damaged_ours(path)
         return (tag.decode(errors="replace") if isinstance(tag, bytes) else str(tag)).startswith("fretwork-")
     return f"<title>{REPORT_TITLE}".encode() in head
+
+
+def _damaged_ours(path: Path) -> bool:
+    return any(path.match(pattern) for pattern in DAMAGED_OURS)
 
 
 def _outputs(folder: Path, outputs: Iterable[str]) -> list[Path]:
@@ -254,21 +274,46 @@ def _refuse_foreign(folder: Path, outputs: Iterable[str], recorded: dict[str, st
                          "or remove them yourself")
 
 
-def _clear(folder: Path, outputs: Iterable[str], option: str, note: Callable[[str], None]) -> None:
-    """Remove the outputs of an earlier run (all fretwork's: :func:`_refuse_foreign` first)."""
-    old = _outputs(folder, outputs)
-    for path in old:
+def _set_aside(folder: Path, outputs: Iterable[str], option: str) -> None:
+    """Move the outputs of an earlier run (all fretwork's: :func:`_refuse_foreign` first) into
+    :data:`EARLIER_NAME`, where :func:`_settle` removes them or puts them back."""
+    earlier = folder / EARLIER_NAME
+    for path in _outputs(folder, outputs):
+        target = earlier / path.relative_to(folder)
         try:
-            if path.is_dir() and not path.is_symlink():
-                shutil.rmtree(path)
-            else:
-                path.unlink()
+            target.parent.mkdir(parents=True, exist_ok=True)
+            path.rename(target)
         except OSError as error:
-            raise InputError(f"{option} {folder}: cannot remove the earlier output {path.name} "
+            _put_back(earlier, folder)
+            raise InputError(f"{option} {folder}: cannot set aside the earlier output {path.name} "
                              f"({error.strerror})") from None
+
+
+def _put_back(earlier: Path, folder: Path) -> None:
+    """Move what :func:`_set_aside` moved into ``earlier`` back into ``folder``, where the name is
+    free (merging folders), and remove ``earlier``."""
+    for path in sorted(earlier.iterdir()) if earlier.is_dir() else ():
+        target = folder / path.name
+        if path.is_dir() and not path.is_symlink() and target.is_dir() and not target.is_symlink():
+            _put_back(path, target)
+        elif not target.exists() and not target.is_symlink():
+            path.rename(target)
+    shutil.rmtree(earlier, ignore_errors=True)
+
+
+def _settle(folder: Path, outputs: Iterable[str], failed: bool, note: Callable[[str], None]) -> None:
+    """The end of what :func:`_set_aside` began: a command that failed before writing any of its
+    outputs gets the earlier run's back; otherwise they are removed, and said so."""
+    earlier = folder / EARLIER_NAME
+    if not earlier.is_dir():
+        return
+    if failed and not _outputs(folder, outputs):
+        _put_back(earlier, folder)
+        return
+    old = sorted(earlier.iterdir())
+    shutil.rmtree(earlier, ignore_errors=True)
     if old:
-        note(f"removed {len(old)} output(s) of an earlier run from {folder}: "
-             + ", ".join(p.name for p in old))
+        note(f"removed {len(old)} output(s) of an earlier run from {folder}: " + ", ".join(p.name for p in old))
 
 
 @contextmanager
@@ -278,9 +323,10 @@ def claim(path, *, outputs: Iterable[str] = (), clear: bool = True, ready: Calla
     """Check, create, lock and clear the output folder ``path`` for the block (module doc).
 
     outputs: names or glob patterns of what the command writes there: refused when not
-    fretwork's, removed first when ``clear`` (false: kept, e.g. to resume, or a single file the
-    command writes anew), and recorded in the manifest when the block ends. ready: checks the
-    command's input (raises InputError) before anything is removed. partial: patterns of
+    fretwork's, set aside first when ``clear`` (false: kept, e.g. to resume, or a single file the
+    command writes anew) and removed when the block ends having written outputs, put back when
+    it fails before writing any; recorded in the manifest when the block ends. ready: checks the
+    command's input (raises InputError) before anything is set aside. partial: patterns of
     half-written files, removed when the block is interrupted (Ctrl-C). note: where the
     one-line note about removed outputs goes.
     """
@@ -295,12 +341,14 @@ def claim(path, *, outputs: Iterable[str] = (), clear: bool = True, ready: Calla
         raise
     since = lock.stat().st_mtime_ns
     try:
+        # outputs a killed command set aside: its own, if it wrote any, replace them
+        _settle(folder, outputs, True, note)
         if ready is not None:
             ready()
         recorded = _recorded(folder)
         _refuse_foreign(folder, outputs, recorded, option)
         if clear:
-            _clear(folder, outputs, option, note)
+            _set_aside(folder, outputs, option)
     except BaseException:
         lock.unlink(missing_ok=True)
         _remove_empty(created)
@@ -313,6 +361,7 @@ def claim(path, *, outputs: Iterable[str] = (), clear: bool = True, ready: Calla
         _remove_partial(folder, partial, since)
         raise
     finally:
+        _settle(folder, outputs, failed, note)
         # what is below the outputs now is fretwork's: it was (else the claim was refused), or the
         # command wrote it; what the manifest holds beside (another command's) stays as recorded
         kept = {name: stamp for name, stamp in recorded.items()
@@ -327,13 +376,16 @@ def _remove_partial(folder: Path, patterns: Iterable[str], since: int) -> None:
     """Remove the files matching ``patterns`` below ``folder`` written since ``since`` (ns), then
     the empty folders below it made or emptied since then: an older file, or an empty folder of
     the user's, is not the interrupted command's."""
+    def earlier(path: Path) -> bool:  # an earlier run's outputs, set aside: not the command's
+        return EARLIER_NAME in path.relative_to(folder).parts
+
     for pattern in patterns:
         for path in folder.glob(pattern):
-            if path.is_file() and not path.is_symlink() and path.stat().st_mtime_ns >= since:
+            if path.is_file() and not path.is_symlink() and path.stat().st_mtime_ns >= since and not earlier(path):
                 path.unlink(missing_ok=True)
     for parent, _, _ in sorted(os.walk(folder), key=lambda entry: -len(Path(entry[0]).parts)):
         below = Path(parent)
-        if below != folder and not any(below.iterdir()) and below.stat().st_mtime_ns >= since:
+        if below != folder and not earlier(below) and not any(below.iterdir()) and below.stat().st_mtime_ns >= since:
             below.rmdir()
 
 
@@ -345,4 +397,4 @@ def _remove_empty(created: list[Path]) -> None:
             return
 
 
-__all__ = ["LOCK_NAME", "MANIFEST_NAME", "REPORT_TITLE", "check_folder", "claim"]
+__all__ = ["EARLIER_NAME", "LOCK_NAME", "MANIFEST_NAME", "REPORT_TITLE", "check_folder", "claim"]
