@@ -12,7 +12,9 @@ no more than ``area_tolerance`` of the nominal area still slid (shakedown to sti
 :func:`contact.verdict.active_slip_area_fraction` for what counts as sliding). The wear phase
 also stops when loosening is evident: the clamp force has kept falling over the window while the
 stick area shrank. A run ends with its :class:`contact.verdict.Ending`; a run whose increment
-fails raises :class:`RunStopped`, which carries the ending too (slid off, wear runaway, diverged).
+fails raises :class:`RunStopped`, which carries the ending too (slid off, wear runaway, separated,
+diverged). A preload that closes no contact point is an InputError before any cycle: the area
+fractions refer to the area it closes, and an open contact would read as stuck.
 
 No I/O here: every increment and cycle is handed to an observer; the pipeline writes files
 and draws progress bars. Units: mm, N, MPa, mJ.
@@ -29,6 +31,7 @@ from contact.law import ContactState, Status, utilised_cof
 from contact.solver import ContactSolver, ConvergenceError, Effects, Equilibrium
 from contact.verdict import (Ending, active_slip_area_fraction, clamp_lost, cycle_figures, loosening_evident,
                              loosening_window_blocks, verdict)
+from reduction.errors import InputError
 
 PHASES = ("preload", "cof", "wear")
 HISTORY_SHAPES = ("ramp", "cyclic", "constant")
@@ -180,7 +183,8 @@ class RunResult:
 
 
 class RunStopped(ConvergenceError):
-    """An increment of the run failed; ``ending`` says how (slid off, wear runaway, diverged)."""
+    """An increment of the run failed; ``ending`` says how (slid off, wear runaway, separated,
+    diverged)."""
 
     def __init__(self, message: str, ending: Ending):
         super().__init__(message)
@@ -189,7 +193,8 @@ class RunStopped(ConvergenceError):
 
 def failure_ending(error: ConvergenceError) -> Ending:
     """The ending of a run whose increment raised ``error``: read from its typed cause."""
-    return {"slid_off": Ending.SLID_OFF, "wear_runaway": Ending.WEAR_RUNAWAY}.get(error.cause, Ending.DIVERGED)
+    return {"slid_off": Ending.SLID_OFF, "wear_runaway": Ending.WEAR_RUNAWAY,
+            "separated": Ending.SEPARATED}.get(error.cause, Ending.DIVERGED)
 
 
 class Observer:
@@ -300,6 +305,8 @@ class _Run:
             self.step(amplitudes, Effects(), "preload", 0, 1.0 + k / n)
         closed = self.equilibrium.forces.reshape(self.solver.n_points, -1)[:, 0] > 0.0
         self.nominal_area = float(self.solver.area[closed].sum())
+        if self.nominal_area == 0.0:
+            raise InputError(_nothing_pressed(self.solver.space.structure.initial_overclosure))
         self.initial_clamp = self.clamp_force()
 
     def resume(self, snapshot: Snapshot):
@@ -499,6 +506,17 @@ def run(solver: ContactSolver, state: ContactState, program: LoadProgram, proced
     except ConvergenceError as error:
         raise RunStopped(str(error), failure_ending(error)) from error
     return current.result(stopped_early)
+
+
+def _nothing_pressed(overclosure: np.ndarray) -> str:
+    """Why a run whose preload closed no contact point is refused, with the initial gap (mm)."""
+    gap = -float(np.max(overclosure, initial=-np.inf))
+    where = (f"the surfaces start {gap:.3g} mm apart at their closest" if gap > 0.0 else
+             "the surfaces touch at the start but nothing holds them together")
+    return ("nothing presses the contact surfaces together after the preload: no contact point is closed "
+            f"(nominal contact area 0; {where}), and a run on an open contact would read as stuck; check the "
+            "loads (a normal load with history = \"ramp\" or \"constant\" acts in the preload, a \"cyclic\" one "
+            "does not), the bolts and their pretension, and the initial gap")
 
 
 def _utilisation(equilibrium: Equilibrium, solver: ContactSolver) -> tuple[np.ndarray, np.ndarray]:

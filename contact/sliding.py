@@ -34,7 +34,7 @@ from contact.assembly import Assembly
 from contact.interface import Pairing, kinematic_operator, pair_surfaces
 from contact.law import ContactLaw, ContactState
 from contact.mortar import facet_measures
-from contact.solver import ContactSolver, Effects, Equilibrium, NewtonSettings
+from contact.solver import ContactSolver, ConvergenceError, Effects, Equilibrium, NewtonSettings
 from contact.sparse import space_of
 from contact.structure import ContactSpace
 from reduction.errors import InputError
@@ -237,7 +237,11 @@ class SlidingSolver:
         reference = self.assembly.pairing
         moved = {role: replace(getattr(reference, role), coordinates=getattr(reference, role).coordinates
                                + displacement[self._dofs[role]]) for role in ("slave", "master")}
-        pairing = pair_surfaces(moved["slave"], moved["master"], method=self.method)
+        try:
+            pairing = pair_surfaces(moved["slave"], moved["master"], method=self.method)
+        except InputError:
+            # the selections paired at build time: what the bodies did since parted them
+            raise ConvergenceError(self._separated(displacement, state), cause="separated") from None
         # The gap of the undeformed surfaces along the new pairing, plus any gap the scene
         # gave instead of the geometric one (an analytic profile on flat meshes).
         gap = self._geometric_gap(pairing) + reference.initial_overclosure - self._reference_gap
@@ -258,6 +262,21 @@ class SlidingSolver:
             wear[1] = master_wear_at_points(pairing, state.master_wear)
             state = replace(state, wear_depth=wear)
         return start, state
+
+    def _separated(self, displacement: np.ndarray, state: SlidingState) -> str:
+        """Why a re-pairing found the surfaces apart, with how far the slave moved relative to the
+        master, along the surface and across it, and how deep the surfaces wore (mm)."""
+        normal = self.assembly.pairing.normal
+        moved = displacement[self._dofs["slave"]] - displacement[self._dofs["master"]].mean(axis=0)
+        across = np.einsum("nd,nd->n", moved, normal)
+        along = np.linalg.norm(moved - across[:, None] * normal, axis=1)
+        worn = 0.0 if state.wear_depth is None else float(np.max(state.wear_depth.sum(axis=0), initial=0.0))
+        return (f"the contact surfaces no longer face each other: re-paired where the bodies have moved, no master "
+                f"facet faces a slave facet; relative to the master the slave moved up to "
+                f"{np.max(along, initial=0.0):.3g} mm along the surface and {np.max(np.abs(across), initial=0.0):.3g} "
+                "mm across it" + (f", and the surfaces wore up to {worn:.3g} mm" if worn > 0.0 else "")
+                + ": they slid or wore apart (a motion or load far larger than meant, a µm value given in mm, a "
+                "contact stiffness far too low, or more wear cycles than the surfaces are deep)")
 
     def _resume_pairing(self, state: SlidingState) -> None:
         """Take up the pairing a state was solved on (a run resumed from a checkpoint)."""

@@ -37,7 +37,9 @@ class Ending(str, Enum):
     and the run stopped early; loosening: the wear phase stopped because loosening was evident;
     slid_off: an increment failed because tangential equilibrium was lost (the load exceeds what
     friction can carry); wear_runaway: an increment failed because the wear increment did not
-    shrink with the step; diverged: an increment failed for another reason.
+    shrink with the step; separated: the contact surfaces, re-paired where the bodies had moved
+    (finite sliding), no longer face each other: they slid or wore apart during the run;
+    diverged: an increment failed for another reason.
     """
 
     COMPLETED = "completed"
@@ -45,6 +47,7 @@ class Ending(str, Enum):
     LOOSENING = "loosening"
     SLID_OFF = "slid_off"
     WEAR_RUNAWAY = "wear_runaway"
+    SEPARATED = "separated"
     DIVERGED = "diverged"
 
 

@@ -15,6 +15,7 @@ from contact.sliding import SlidingSolver
 from contact.solver import ConvergenceError
 from contact.verdict import Ending
 from pipelines.build import Model, build
+from pipelines.output.checkpoint import check_resumable
 from pipelines.output.damage import DamageObserver
 from pipelines.output.paraview import (
     write_final_vtu,
@@ -88,9 +89,11 @@ class ProgressBar:
 #: Why a run ended, as its progress bar says it.
 ENDINGS = {Ending.COMPLETED: "all cycles run", Ending.SHAKEDOWN: "stuck: shaken down, no more cycles needed",
            Ending.LOOSENING: "stopped: loosening evident", Ending.SLID_OFF: "stopped: the joint slides off",
-           Ending.WEAR_RUNAWAY: "stopped: runaway wear", Ending.DIVERGED: "stopped: an increment did not converge"}
+           Ending.WEAR_RUNAWAY: "stopped: runaway wear",
+           Ending.SEPARATED: "stopped: the contact surfaces slid or wore apart",
+           Ending.DIVERGED: "stopped: an increment did not converge"}
 #: Runs that end early but answer the question: their results file is complete, marked with the ending.
-EARLY_ENDINGS = (Ending.SLID_OFF, Ending.WEAR_RUNAWAY)
+EARLY_ENDINGS = (Ending.SLID_OFF, Ending.WEAR_RUNAWAY, Ending.SEPARATED)
 
 
 @dataclass
@@ -132,8 +135,8 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
     proc = model.procedure
     total = proc.cof_cycles + (proc.wear_cycles if "wear" in effects else 0)
     settings = model.scene.section("procedure")
-    if resume and (out_dir / "results.h5").is_file() and not (out_dir / "checkpoint.h5").is_file():
-        raise InputError(f"{out_dir / 'results.h5'} is complete: there is nothing to resume")
+    if resume:
+        check_resumable(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     writer = ResultsWriter(out_dir / "results.h5", model, space, record_every=settings.get("record_every", 1),
                            resume=resume, field_output=settings.get("field_output"))
@@ -164,6 +167,10 @@ def run_model(model: Model, out_dir: Path, *, progress: bool = True, plots: bool
         raise
     except (ConvergenceError, KeyboardInterrupt):
         writer.abort()
+        bar.close()
+        raise
+    except InputError:  # refused before the cycles (the preload closed no contact): no output stays
+        writer.discard()
         bar.close()
         raise
     bar.close(ENDINGS[result.ending], done=True)
@@ -219,9 +226,12 @@ def run_scene(scene: Scene, out_dir: str | Path, *, progress: bool = True, plots
               resume: bool = False, cache: StageCache | None = None) -> Outcome:
     """Build the scene's model and run it into ``out_dir``; see :func:`run_model`.
 
-    resume: continue from ``out_dir/checkpoint.h5`` (written every ``checkpoint_every`` cycles).
+    resume: continue from ``out_dir/checkpoint.h5`` (written every ``checkpoint_every`` cycles),
+    checked before anything is built: a missing or damaged checkpoint costs no meshing.
     cache: stage cache for the multibody stage of a coupled scene.
     """
+    if resume:
+        check_resumable(out_dir)
     times = {}
     multibody = None
     if "coupling" in scene.data:

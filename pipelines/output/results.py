@@ -10,7 +10,8 @@ Layout (format_version 1; every dataset carries a ``units`` attribute):
                            hold the top scene file's own text, its base not included),
                            complete (False until the run ends),
                            ending (contact.verdict.Ending: completed, shakedown, loosening, or
-                           slid_off / wear_runaway: the cycles so far, without /final and /summary;
+                           slid_off / wear_runaway / separated: the cycles so far, without /final
+                           and /summary;
                            such a file's ending_message is the failed increment's error, in words)
     /points/               coordinates (n, dim) mm, area (n,) mm² (mm in 2D), normal (n, dim),
                            initial_overclosure (n,) mm, facets (m, k) point indices of the
@@ -212,8 +213,12 @@ class ResultsWriter(Observer):
             with h5py.File(self.checkpoint_path, "r") as file:
                 self._check_scene(str(file.attrs.get("scene_toml", "")))
                 self.snapshot = read_snapshot(file["checkpoint"], self.meter)
-        except OSError as error:
-            raise InputError(f"{self.checkpoint_path} cannot be read: {error}") from None
+        except InputError:  # a checkpoint of another scene
+            raise
+        except (OSError, KeyError, ValueError) as error:
+            raise InputError(f"{self.checkpoint_path} is damaged ({error}): the run cannot be resumed from it; run "
+                             "again without --resume to start the run afresh (that replaces the damaged "
+                             "checkpoint)") from None
         self._part_from_checkpoint()
 
     def _check_scene(self, text: str) -> None:
@@ -427,6 +432,13 @@ class ResultsWriter(Observer):
         if self.file.id.valid:
             self._flush()
             self.file.close()
+
+    def discard(self) -> None:
+        """Close and remove the part file of a run refused before its first cycle (nothing presses
+        the surfaces together after the preload): a refused input leaves no output behind."""
+        if self.file.id.valid:
+            self.file.close()
+        self.part_path.unlink(missing_ok=True)
 
 
 def _copy_fresh(source_path: Path, target_path: Path, leave_out: tuple = ()) -> None:
