@@ -3,13 +3,16 @@
 A checkpoint is a complete copy of the results file with a ``/checkpoint`` group holding the
 procedure's :class:`contact.procedure.Snapshot` and the energy meter's accumulators. It is
 written under a temporary name and renamed, so ``checkpoint.h5`` is always whole: a run
-killed at any moment resumes from the last complete checkpoint.
+killed at any moment resumes from the last complete checkpoint. :func:`check_resumable` says,
+before a resumed run builds anything, whether there is a checkpoint to resume and whether it can
+be read (one truncated or emptied after it was written cannot).
 """
 
 from __future__ import annotations
 
 import json
 from dataclasses import fields
+from pathlib import Path
 
 import h5py
 
@@ -17,6 +20,9 @@ from contact.law import ContactState
 from contact.sliding import SlidingState
 from contact.procedure import CycleSummary, Snapshot
 from contact.solver import Equilibrium
+from reduction.errors import InputError
+
+CHECKPOINT_NAME = "checkpoint.h5"
 
 SUMMARY_ARRAYS = ("pressure", "shear", "cof", "max_utilised_cof", "max_shear", "status", "slip_range",
                   "dissipation_in_cycle")
@@ -99,4 +105,31 @@ def read_snapshot(group: h5py.Group, meter) -> Snapshot:
                     state=state, equilibrium=equilibrium, history=history, **memories, **scalars)
 
 
-__all__ = ["write_snapshot", "read_snapshot"]
+def check_resumable(folder) -> Path:
+    """``folder``'s checkpoint, if a run can be resumed from it; an InputError saying why not
+    (none: nothing to resume, or the run is complete; damaged: empty, truncated or unreadable,
+    or without the state a resumed run needs)."""
+    folder = Path(folder)
+    path = folder / CHECKPOINT_NAME
+    if not path.is_file():
+        if (folder / "results.h5").is_file():
+            raise InputError(f"{folder / 'results.h5'} is complete: there is nothing to resume")
+        raise InputError(f"nothing to resume: {path} does not exist (a run writes it every checkpoint_every "
+                         "cycles); run without --resume")
+    size = path.stat().st_size
+    damaged = (f"{path} is damaged ({{}}): the run cannot be resumed from it; run again without --resume "
+               "to start the run afresh (that replaces the damaged checkpoint)")
+    if size == 0:
+        raise InputError(damaged.format("empty: 0 bytes"))
+    try:
+        with h5py.File(path, "r") as file:
+            state = file.get("checkpoint")
+            whole = isinstance(state, h5py.Group) and "scalars" in state.attrs and "state" in state
+    except OSError:
+        raise InputError(damaged.format(f"truncated or unreadable: HDF5 cannot open its {size:,} bytes")) from None
+    if not whole:
+        raise InputError(damaged.format("it holds no complete /checkpoint state"))
+    return path
+
+
+__all__ = ["CHECKPOINT_NAME", "check_resumable", "write_snapshot", "read_snapshot"]
