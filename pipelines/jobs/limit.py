@@ -132,6 +132,8 @@ def parse_range_um(text: str) -> tuple[float, float]:
         low, high = (float(v) for v in text.split(":"))
     except ValueError:
         raise InputError(f"--amplitude {text!r}: use LOW:HIGH in µm, e.g. 100:400") from None
+    if not (math.isfinite(low) and math.isfinite(high)):
+        raise InputError(f"--amplitude {text!r}: LOW and HIGH must be finite numbers (µm)")
     if not 0 < low < high:
         raise InputError(f"--amplitude {text!r}: needs 0 < LOW < HIGH (µm)")
     if high < SMALLEST_RANGE_TOP_UM:
@@ -146,11 +148,13 @@ def check_search(low_mm: float, high_mm: float, tolerance_mm: float, grid: int =
     A tolerance as wide as the range is refused: the search could only say that the limit lies
     somewhere in the range, which the range already says."""
     problems = []
-    if not 0 < low_mm < high_mm:
+    if not (math.isfinite(low_mm) and math.isfinite(high_mm)):
+        problems.append("the amplitude range must be finite")
+    elif not 0 < low_mm < high_mm:
         problems.append("the amplitude range needs 0 < low < high")
-    if tolerance_mm <= 0:
-        problems.append("the limit tolerance must be positive")
-    elif 0 < low_mm < high_mm and tolerance_mm >= (1 - 1e-9) * (high_mm - low_mm):  # µm → mm rounds
+    if not math.isfinite(tolerance_mm) or tolerance_mm <= 0:
+        problems.append("the limit tolerance must be a finite positive number")
+    elif math.isfinite(high_mm) and 0 < low_mm < high_mm and tolerance_mm >= (1 - 1e-9) * (high_mm - low_mm):  # µm → mm rounds
         width = high_mm - low_mm
         problems.append(f"the limit tolerance, {format_um(tolerance_mm)} µm, is not narrower than the amplitude "
                         f"range {format_um(low_mm, width)}:{format_um(high_mm, width)} µm "
@@ -209,7 +213,8 @@ class BuiltModels:
 
 #: Runs that stop on a failed increment and still answer the search: the joint is not stuck.
 STOPPED = {Ending.SLID_OFF: "the CW slides off: tangential equilibrium lost",
-           Ending.WEAR_RUNAWAY: "runaway wear: the wear phase slid by itself at the scene's cycle jump"}
+           Ending.WEAR_RUNAWAY: "runaway wear: the wear phase slid by itself at the scene's cycle jump",
+           Ending.SEPARATED: "the CW's contact surfaces slid or wore apart"}
 
 
 def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_dir: str | None,
@@ -217,7 +222,8 @@ def run_amplitude(scene_path: str, overrides: dict, amplitude_mm: float, cache_d
     """One contact run of the scene at a wing amplitude (mm); a case of the limit search.
 
     models: the search's built models (built here when None). A run that stops because the CW
-    slid off or its wear ran away counts as ``loosening`` (:data:`STOPPED`); any other failed
+    slid off, its wear ran away or its surfaces came apart counts as ``loosening``
+    (:data:`STOPPED`); any other failed
     run is an error."""
     import tempfile
     from contextlib import nullcontext

@@ -41,7 +41,7 @@ PACKAGES = ("fretwork", "numpy", "scipy", "scikit-fem", "exudyn", "h5py", "matpl
 #: the folder a limit search writes each amplitude's run into (pipelines.jobs.limit.run_amplitude)
 AMPLITUDE_FOLDER = re.compile(r"amplitude_[0-9.]+um")
 #: the endings of a run that stopped and still answer the search: not stuck (pipelines.jobs.limit.STOPPED)
-STOPPED_NOT_STUCK = ("slid_off", "wear_runaway")
+STOPPED_NOT_STUCK = ("slid_off", "wear_runaway", "separated")
 #: Area fractions are sums of point areas over the nominal area: a whole area can sum to 1 + 2e-16.
 ROUNDING = 1e-9
 AREAS_NOTE = ("Areas are fractions of the contact area closed after the preload. Above 100 %: points beyond "

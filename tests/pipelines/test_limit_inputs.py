@@ -95,3 +95,17 @@ def test_limit_json_is_strict_json_when_a_run_has_no_finite_figures(tmp_path):
     assert [run["min_stick_margin"] for run in read["runs"]] == [None, None]
     assert [run["max_wear_depth_mm"] for run in read["runs"]] == [0.0, 1.5e-3]
     assert read["limit_um"] == 200.0
+
+
+@pytest.mark.parametrize("low, high, tolerance", [(0.1, float("inf"), 0.01), (float("nan"), 0.4, 0.01),
+                                                  (0.1, 0.4, float("nan")), (0.1, 0.4, float("inf"))])
+def test_a_library_caller_cannot_search_a_non_finite_range_or_tolerance(low, high, tolerance):
+    """find_limit's own check (not only the command line's) refuses inf and NaN: a range to inf
+    ran cases at nan and inf µm and reported a limit below the range (QA)."""
+    with pytest.raises(InputError, match="finite"):
+        limits.check_search(low, high, tolerance)
+
+
+def test_an_infinite_amplitude_range_is_refused_when_parsed():
+    with pytest.raises(InputError, match="finite"):
+        limits.parse_range_um("100:inf")
