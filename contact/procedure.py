@@ -29,8 +29,8 @@ import numpy as np
 from contact.cycle_jump import AdaptiveJump, local_stiffness, next_jump, wear_rate
 from contact.law import ContactState, Status, utilised_cof
 from contact.solver import ContactSolver, ConvergenceError, Effects, Equilibrium
-from contact.verdict import (Ending, active_slip_area_fraction, clamp_lost, cycle_figures, loosening_evident,
-                             loosening_window_blocks, verdict)
+from contact.verdict import (Ending, active_slip_area_fraction, clamp_lost, clamp_still_falling, cycle_figures,
+                             loosening_evident, loosening_window_blocks, verdict)
 from reduction.errors import InputError
 
 PHASES = ("preload", "cof", "wear")
@@ -466,6 +466,8 @@ class _Run:
         ending = (Ending.SHAKEDOWN if self.stationary else Ending.LOOSENING if stopped_early else Ending.COMPLETED)
         said = verdict(self.history, self.procedure, self.stationary, loosened_before=self.loosening_at is not None,
                        lost_clamp=clamp_lost(self.history[-1].clamp_force, self.initial_clamp, self.procedure))
+        if said != "loosening" and self.bolts is not None:
+            figures.update(clamp_still_falling(self.history, self.procedure, self.initial_clamp))
         return RunResult(said, self.stationary, figures, self.state, self.equilibrium, self.history, ending)
 
 

@@ -20,11 +20,11 @@ from contact.law import ContactState, Status
 
 VERDICT_MEANINGS = {
     "stick": "shakedown to stick: at most the area tolerance still slides; the joint is safe at this load",
-    "partial_slip": "a stick zone holds and the clamp force is stable, but the contact edges keep sliding at a "
+    "partial_slip": "a stick zone holds and loosening is not evident, but the contact edges keep sliding at a "
                     "COF that never had to rise (constant COF, or mu_0 = mu_max): fretting at the edges, no "
                     "friction-driven surface damage; judge crack risk by FFDP",
     "damage": "points keep sliding after their COF rose there, at mu_max or still rising towards it when the run "
-              "ended (or the whole contact slides): fretting scars expected, clamp force stable",
+              "ended (or the whole contact slides): fretting scars expected, loosening not evident",
     "loosening": "the clamp force keeps falling while the stick area shrinks, or half of it is lost: the joint "
                  "loosens",
 }
@@ -187,6 +187,28 @@ def loosening_window_blocks(history: list, procedure) -> int:
     return max(count, least)
 
 
+def _clamp_window(history: list, procedure):
+    """The wear cycles of the loosening window (:func:`loosening_window_blocks`) with their clamp
+    forces (N), real cycles and the loss rates (N per real cycle) over its two halves of equal
+    real duration; None while the wear phase does not fill the window."""
+    wear_cycles = [c for c in history if c.phase == "wear" and c.clamp_force is not None]
+    if len(wear_cycles) < max(procedure.loosening_window, 2):
+        return None
+    span = procedure.loosening_window_cycles
+    if span is not None and wear_cycles[-1].equivalent_cycles - wear_cycles[0].equivalent_cycles < span:
+        return None  # the wear phase does not span the window yet
+    recent = wear_cycles[-loosening_window_blocks(wear_cycles, procedure):]
+    force = np.array([c.clamp_force for c in recent])
+    real = np.array([c.equivalent_cycles for c in recent])  # blocks of an adaptive jump differ in length
+    if real[-1] <= real[0]:
+        return None
+    middle = int(np.searchsorted(real, 0.5 * (real[0] + real[-1])))  # halves of equal real duration
+    middle = min(max(middle, 1), len(real) - 2) if len(real) > 2 else 1
+    first_rate = (force[0] - force[middle]) / (real[middle] - real[0])
+    second_rate = (force[middle] - force[-1]) / (real[-1] - real[middle]) if middle < len(real) - 1 else first_rate
+    return recent, force, real, first_rate, second_rate
+
+
 def loosening_evident(history: list, procedure) -> bool:
     """Loosening is evident when, over the loosening window (:func:`loosening_window_blocks`:
     the last ``loosening_window`` wear cycles, or those of the last ``loosening_window_cycles``
@@ -198,22 +220,35 @@ def loosening_evident(history: list, procedure) -> bool:
     the window, not its first and last values: points at the stick limit flicker between
     stick and slip from cycle to cycle by a few per cent of the area, and an endpoint
     comparison called a contact loosening whose stick area was steady or regrowing."""
-    wear_cycles = [c for c in history if c.phase == "wear" and c.clamp_force is not None]
-    if len(wear_cycles) < procedure.loosening_window:
+    window = _clamp_window(history, procedure)
+    if window is None or len(window[0]) < procedure.loosening_window:
         return False
-    span = procedure.loosening_window_cycles
-    if span is not None and wear_cycles[-1].equivalent_cycles - wear_cycles[0].equivalent_cycles < span:
-        return False  # the wear phase does not span the window yet
-    recent = wear_cycles[-loosening_window_blocks(wear_cycles, procedure):]
-    force = np.array([c.clamp_force for c in recent])
+    recent, force, real, first_rate, second_rate = window
     stick = np.array([c.figures["stick_area_fraction"] for c in recent])
-    real = np.array([c.equivalent_cycles for c in recent])  # blocks of an adaptive jump differ in length
-    middle = int(np.searchsorted(real, 0.5 * (real[0] + real[-1])))  # halves of equal real duration
-    middle = min(max(middle, 1), len(real) - 2)
-    first_rate = (force[0] - force[middle]) / (real[middle] - real[0])
-    second_rate = (force[middle] - force[-1]) / (real[-1] - real[middle])
     falling = second_rate > 0.0 and second_rate >= 0.8 * first_rate
     visible = force[0] - force[-1] > 5e-3 * abs(force[0])
     stick_change = np.polyfit(real - real[0], stick, 1)[0] * (real[-1] - real[0])
     stick_shrinks = stick_change < -procedure.area_tolerance or stick[-1] <= procedure.area_tolerance
     return bool(falling and visible and stick_shrinks)
+
+
+def clamp_still_falling(history: list, procedure, initial_clamp: float | None) -> dict:
+    """How much clamp force (N) the joint lost over the loosening window when it is still losing
+    it visibly at the end (more than 0.5 % of ``initial_clamp`` over the window, and in its
+    second half too): ``clamp_loss_recent_fraction`` (of the initial clamp force),
+    ``clamp_loss_recent_cycles`` (the window's real cycles) and ``clamp_loss_rate_ratio`` (the
+    second half's rate over the first's: below 1 the loss is slowing). Empty when the clamp
+    force has settled, or the window is not filled. A joint judged stuck, partial_slip or
+    damage while this is not empty has not settled: its clamp force may level off or go on
+    falling (QA: a double beam at constant COF lost 6.3 % in 1e5 cycles, still falling at a
+    slowing rate, and was called partial_slip, whose meaning then said "clamp force stable")."""
+    window = _clamp_window(history, procedure)
+    if window is None or initial_clamp is None or initial_clamp <= 0.0:
+        return {}
+    recent, force, real, first_rate, second_rate = window
+    lost = force[0] - force[-1]
+    if lost <= 5e-3 * initial_clamp or second_rate <= 0.0:
+        return {}
+    return {"clamp_loss_recent_fraction": float(lost / initial_clamp),
+            "clamp_loss_recent_cycles": float(real[-1] - real[0]),
+            "clamp_loss_rate_ratio": float(second_rate / first_rate) if first_rate > 0.0 else None}

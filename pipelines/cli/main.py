@@ -93,6 +93,19 @@ def _short_of_life(s: dict) -> str | None:
             "time only (raise wear_cycles, or the jump, to reach the life)")
 
 
+def _clamp_still_falling(s: dict) -> str | None:
+    """A line when a joint not judged loosening was still losing clamp force visibly at the end
+    (:func:`contact.verdict.clamp_still_falling`): its verdict holds for the running time run."""
+    lost = s.get("clamp_loss_recent_fraction")
+    if lost is None:
+        return None
+    ratio = s.get("clamp_loss_rate_ratio")
+    pace = ("at a slowing rate" if ratio is not None and ratio < 0.8 else "at an undiminished rate")
+    return (f"  NOTE: the clamp force was still falling at the end: {lost:.2%} of it lost over the last "
+            f"{s['clamp_loss_recent_cycles']:.3g} real cycles, {pace}; the joint has not settled, and whether it "
+            "levels off or loosens needs a longer run (raise wear_cycles or life_cycles)")
+
+
 def _human_summary(outcome) -> str:
     s = outcome.summary
     lines = [f"scene {s['scene']}: verdict {s['verdict'].upper()}"
@@ -121,9 +134,9 @@ def _human_summary(outcome) -> str:
         lines.append(f"  the run stands for {s['equivalent_cycles']:.3g} real load cycles, "
                      f"{s['equivalent_engine_hours']:.3g} engine hours at {s['engine_speed_rpm']:.0f} rpm"
                      + (f"; {', '.join(when)}" if when else ""))
-    short = _short_of_life(s)
-    if short:
-        lines.append(short)
+    for note in (_short_of_life(s), _clamp_still_falling(s)):
+        if note:
+            lines.append(note)
     if s.get("min_stick_margin") is not None:
         lines.append(f"  smallest stick margin of stuck points: {s['min_stick_margin']:.3f} (1 − max |τ|/p / μ_max: "
                      "against the COF sliding can raise a point to, not against its present COF)")

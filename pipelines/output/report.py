@@ -235,9 +235,12 @@ def meaning(s: dict) -> str:
     """What the verdict says about this run, without claims that do not apply to it: no clause on
     an evolved COF where none evolved, none on the clamp force of a joint without bolts
     (:data:`contact.verdict.VERDICT_MEANINGS` states each verdict in general)."""
-    verdict, clamp = s["verdict"], "; clamp force stable" if _has_bolts(s) else ""
+    falling = s.get("clamp_loss_recent_fraction") is not None
+    steady = ("; loosening not evident, but the clamp force was still falling at the end" if falling
+              else "; clamp force stable")
+    verdict, clamp = s["verdict"], steady if _has_bolts(s) else ""
     if verdict == "partial_slip":
-        return ("a stick zone holds" + (" and the clamp force is stable" if _has_bolts(s) else "")
+        return ("a stick zone holds" + (clamp.replace(";", " and", 1) if _has_bolts(s) else "")
                 + ", but the contact edges keep sliding at a COF that never had to rise: fretting at the edges, "
                   "no friction-driven surface damage; judge crack risk by FFDP")
     if verdict == "damage":
@@ -273,6 +276,12 @@ def _operating_rows(s: dict) -> list:
             and s["equivalent_cycles"] < (1.0 - 1e-9) * life:
         rows.append(("NOTE", f"the run ended at its wear_cycles budget, {_percent(s['equivalent_cycles'] / life)} of "
                              f"its life ({_cycles(life)} cycles): the verdict covers that running time only"))
+    if s.get("clamp_loss_recent_fraction") is not None:
+        ratio = s.get("clamp_loss_rate_ratio")
+        pace = "at a slowing rate" if ratio is not None and ratio < 0.8 else "at an undiminished rate"
+        rows.append(("NOTE", f"the clamp force was still falling at the end: {_percent(s['clamp_loss_recent_fraction'])} "
+                             f"of it lost over the last {_cycles(s['clamp_loss_recent_cycles'])} real cycles, {pace}; "
+                             "the joint has not settled, and a longer run tells whether it levels off or loosens"))
     return rows
 
 
