@@ -24,6 +24,7 @@ from mbs.counterweight import ReducedCounterweight
 from mbs.histories import RunHistories
 from mbs.parameters import ModelParams
 from mbs.spectra import Spectrum
+from reduction.errors import InputError
 
 if TYPE_CHECKING:  # mbs.loading runs the model (exudyn): not imported to write files
     from mbs.loading import MultibodyLoading
@@ -193,7 +194,73 @@ def write_campbell(group, campbell: Campbell) -> None:
         group.attrs["system_crossings_json"] = json.dumps(campbell.system_crossings)
 
 
-def read_histories(path) -> dict[str, np.ndarray]:
-    """All ``/histories`` datasets of a results file as arrays, keyed by signal name."""
-    with h5py.File(path, "r") as root:
-        return {name: dataset[()] for name, dataset in root["histories"].items()}
+def read_histories(path, required: tuple[str, ...] = ()) -> dict[str, np.ndarray]:
+    """All ``/histories`` datasets of a results file as arrays, keyed by signal name, checked by
+    :func:`checked_histories`; InputError naming the file when it cannot be read, has none, or
+    lacks a ``required`` signal."""
+    try:
+        root = h5py.File(path, "r")
+    except OSError as error:
+        raise InputError(f"results file {path} is not a readable HDF5 file ({error})") from None
+    with root:
+        if not isinstance(root.get("histories"), h5py.Group):
+            raise InputError(f"results file {path} has no /histories group")
+        signals = checked_histories(root["histories"], path)
+    missing = [name for name in required if name not in signals]
+    if missing:
+        raise InputError(f"results file {path}: /histories/{missing[0]} is missing")
+    return signals
+
+
+def checked_histories(group: h5py.Group, path) -> dict[str, np.ndarray]:
+    """The datasets of a results file's ``/histories`` ``group`` as float arrays keyed by name,
+    the one check every reader of them makes: a time (s) that is a finite, strictly increasing
+    vector, and every signal one finite row per sample. A file that breaks it (written over, cut
+    short, never written by fretwork) is an InputError naming the file ``path`` and the dataset."""
+    where = f"results file {path}"
+    if not isinstance(group.get("time"), h5py.Dataset):
+        raise InputError(f"{where}: /histories/time is missing")
+    time = _checked_time(group["time"], where)
+    signals = {"time": time}
+    for name, dataset in group.items():
+        if name != "time" and isinstance(dataset, h5py.Dataset):
+            signals[name] = _checked_signal(dataset, name, time, where)
+    return signals
+
+
+def _checked_time(dataset: h5py.Dataset, where: str) -> np.ndarray:
+    if dataset.ndim != 1 or not _real(dataset):
+        raise InputError(f"{where}: /histories/time must be a 1-D numeric vector, got shape {dataset.shape} "
+                         f"of {dataset.dtype}")
+    time = np.asarray(dataset[()], dtype=np.float64)
+    if time.size == 0:
+        raise InputError(f"{where}: /histories/time is empty, there is nothing to read")
+    if not np.all(np.isfinite(time)):
+        first = int(np.flatnonzero(~np.isfinite(time))[0])
+        raise InputError(f"{where}: /histories/time has a non-finite value ({time[first]}) at sample {first}")
+    steps = np.diff(time)
+    if np.any(steps <= 0.0):
+        k = int(np.flatnonzero(steps <= 0.0)[0])
+        raise InputError(f"{where}: /histories/time must increase strictly, but sample {k + 1} "
+                         f"({float(time[k + 1])!r} s) does not come after sample {k} ({float(time[k])!r} s)")
+    return time
+
+
+def _checked_signal(dataset: h5py.Dataset, name: str, time: np.ndarray, where: str) -> np.ndarray:
+    if dataset.ndim not in (1, 2) or dataset.shape[0] != time.size:
+        raise InputError(f"{where}: signal {name!r} has shape {dataset.shape}; expected "
+                         f"({time.size},) or ({time.size}, k) to match /histories/time")
+    if not _real(dataset):
+        raise InputError(f"{where}: signal {name!r} holds {dataset.dtype} data, not real numbers")
+    data = np.asarray(dataset[()], dtype=np.float64)
+    bad = ~np.isfinite(data)
+    if bad.any():
+        sample, *component = np.argwhere(bad)[0]
+        at = f"sample {sample} (t = {float(time[sample]):.6g} s)"
+        at += f", component {component[0]}" if component else ""
+        raise InputError(f"{where}: signal {name!r} has a NaN or infinite value at {at}")
+    return data
+
+
+def _real(dataset: h5py.Dataset) -> bool:
+    return np.issubdtype(dataset.dtype, np.integer) or np.issubdtype(dataset.dtype, np.floating)

@@ -30,7 +30,7 @@ import numpy as np
 
 from mbs import histories_file
 from mbs.histories import steady_part
-from mbs.results import SWEEP_FORMAT
+from mbs.results import SWEEP_FORMAT, checked_histories
 from pipelines.fmu.scaling import LoadScaling, load_scaling
 from reduction.errors import InputError
 
@@ -115,19 +115,20 @@ def read_playback_table(results_path: str | os.PathLike, signals: Sequence[str] 
                 "[coupling]); this run has none"
             )
         histories = results["histories"]
-        stored_time = _read_time(histories, results_path)
+        stored = checked_histories(histories, results_path)
+        stored_time = _played_time(histories["time"], stored["time"], results_path)
         part = _multibody_part(results, whole, results_path)
         played = steady_part(stored_time.size) if part == "steady" else slice(None)
         time = stored_time[played]
         if time.size < 2:
             raise InputError(f"results file {results_path}: the steady part of the run has a single sample; "
                              "linear playback needs at least two (export the whole run)")
-        available = [name for name, item in histories.items() if name != "time" and isinstance(item, h5py.Dataset)]
+        available = [name for name in stored if name != "time"]
         selected = _select_signals(signals, available, results_path)
         scaling = load_scaling(results, time, results_path)
         columns, names, units, descriptions = [], [], [], []
         for signal in selected:
-            data = _read_signal(histories[signal], signal, stored_time, played)
+            data = _played_signal(stored[signal], signal, played)
             if scaling is not None:
                 data = scaling.apply(time, data)
             unit = _text_attribute(histories[signal], "units")
@@ -177,30 +178,15 @@ def _refuse_other_kinds(results: h5py.File, results_path: Path) -> None:
                          "`fretwork run`")
 
 
-def _read_time(histories: h5py.Group, results_path: Path) -> np.ndarray:
-    if "time" not in histories or not isinstance(histories["time"], h5py.Dataset):
-        raise InputError(f"results file {results_path}: /histories/time is missing")
-    dataset = histories["time"]
-    if dataset.ndim != 1 or not np.issubdtype(dataset.dtype, np.number):
-        raise InputError(f"/histories/time must be a 1-D numeric vector, got shape {dataset.shape} of {dataset.dtype}")
+def _played_time(dataset: h5py.Dataset, time: np.ndarray, results_path: Path) -> np.ndarray:
+    """The stored sample times (s, checked by :func:`mbs.results.checked_histories`), if the FMU can play them."""
     units = _text_attribute(dataset, "units")
     if units not in ("", "s"):
-        raise InputError(f"/histories/time is in {units!r}; the FMU plays histories in seconds (units='s')")
-    time = np.asarray(dataset[()], dtype=np.float64)
-    if time.size == 0:
-        raise InputError(f"results file {results_path}: /histories/time is empty, there is nothing to play back")
+        raise InputError(f"results file {results_path}: /histories/time is in {units!r}; the FMU plays histories "
+                         "in seconds (units='s')")
     if time.size < 2:
-        raise InputError("/histories/time has a single sample; linear playback needs at least two")
-    if not np.all(np.isfinite(time)):
-        first = int(np.flatnonzero(~np.isfinite(time))[0])
-        raise InputError(f"/histories/time has a non-finite value ({time[first]}) at sample {first}")
-    steps = np.diff(time)
-    if np.any(steps <= 0.0):
-        k = int(np.flatnonzero(steps <= 0.0)[0])
-        raise InputError(
-            f"/histories/time must increase strictly, but sample {k + 1} ({time[k + 1]!r} s) "
-            f"does not come after sample {k} ({time[k]!r} s)"
-        )
+        raise InputError(f"results file {results_path}: /histories/time has a single sample; linear playback needs "
+                         "at least two")
     return time
 
 
@@ -225,28 +211,14 @@ def _select_signals(signals: Sequence[str] | None, available: list[str], results
     return list(signals)
 
 
-def _read_signal(dataset: h5py.Dataset, signal: str, time: np.ndarray, played: slice) -> np.ndarray:
-    """The samples ``played`` of a signal stored at ``time`` (s), as (n_played, k) floats."""
+def _played_signal(data: np.ndarray, signal: str, played: slice) -> np.ndarray:
+    """The samples ``played`` of a stored signal (checked by :func:`mbs.results.checked_histories`)
+    as (n_played, k) floats."""
     if signal in PARAMETER_NAMES:
         raise InputError(f"signal name {signal!r} is reserved for an FMU playback variable; rename the dataset")
-    if dataset.ndim not in (1, 2) or dataset.shape[0] != time.size:
-        raise InputError(
-            f"signal {signal!r} has shape {dataset.shape}; expected ({time.size},) or ({time.size}, k) "
-            f"to match /histories/time"
-        )
-    if not (np.issubdtype(dataset.dtype, np.integer) or np.issubdtype(dataset.dtype, np.floating)):
-        raise InputError(f"signal {signal!r} holds {dataset.dtype} data; only real numbers can be played back")
-    data = np.asarray(dataset[()], dtype=np.float64).reshape(time.size, -1)[played]
-    time = time[played]
+    data = data.reshape(data.shape[0], -1)[played]
     if data.shape[1] == 0:
         raise InputError(f"signal {signal!r} has no components")
-    bad = ~np.isfinite(data)
-    if bad.any():
-        sample, component = np.argwhere(bad)[0]
-        where = f"sample {sample} (t = {time[sample]!r} s)"
-        if dataset.ndim == 2:
-            where += f", component {component}"
-        raise InputError(f"signal {signal!r} has a NaN or infinite value at {where}")
     return data
 
 

@@ -692,15 +692,18 @@ def _is_multibody_run(path: Path) -> bool:
 def _mbs_section(path: Path, root: Path) -> str:
     """A multibody run (``fretwork mbs``): its numbers as the CLI prints them (pipelines.cli.mbs)."""
     from mbs.histories import SETTLED_CHANGE, steady_part, unsettled_change, wing_amplitude
+    from mbs.results import read_histories
 
+    # a run cut short, with NaN samples or without time is refused (QA)
+    histories = read_histories(path, required=("crank_angle", "cw1_wing_torsion"))
     with _open(path) as file:
         params = json.loads(file["model"].attrs["parameters_json"])
         torsion_hz = float(file["model/eigenfrequencies"][int(file["model"].attrs["torsion_mode"])])
         real_time = float(file["model"].attrs.get("real_time_factor", np.nan))
-        names = sorted((n for n in file["histories"] if re.fullmatch(r"cw\d+_wing_torsion", n)),
-                       key=lambda n: int(n[2:].split("_")[0]))
-        torsion = np.array([file["histories"][n][()] for n in names])
-        crank = file["histories/crank_angle"][()]
+    names = sorted((n for n in histories if re.fullmatch(r"cw\d+_wing_torsion", n)),
+                   key=lambda n: int(n[2:].split("_")[0]))
+    torsion = np.array([histories[n] for n in names])
+    crank = histories["crank_angle"]
     amplitudes = wing_amplitude(torsion[:, steady_part(torsion.shape[1])])
     change = unsettled_change(crank, torsion)
     solver = params.get("solver", {})

@@ -241,6 +241,7 @@ def test_an_mbs_page_gives_the_runs_numbers_and_no_verdict_glossary(tmp_path):
             "revolutions": revolutions, "time_step": 5e-5}}), torsion_mode=1, real_time_factor=0.24)
         model.create_dataset("eigenfrequencies", data=[500.0, 673.54, 1236.5])
         histories = file.create_group("histories")
+        histories.create_dataset("time", data=time)
         histories.create_dataset("crank_angle", data=crank)
         histories.create_dataset("cw1_wing_torsion", data=7.5e-5 * np.sin(30 * crank))
         histories.create_dataset("cw2_wing_torsion", data=4.3e-5 * np.sin(30 * crank))
