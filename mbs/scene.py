@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import difflib
 import hashlib
+import math
 import tomllib
 from dataclasses import fields, replace
 from pathlib import Path
@@ -81,6 +82,43 @@ _KINDS = {
 }
 
 
+def _not_finite(value) -> bool:
+    """Whether a number, or a number of a list, is inf or NaN (what no model takes)."""
+    entries = value if isinstance(value, list) else [value]
+    return any(_number(entry) and not math.isfinite(entry) for entry in entries)
+
+
+def _finite_sentence(where: str, key: str, value, requirement: str) -> str:
+    """A non-finite number refused in the scene schema's words (pipelines.scene.schema): the key
+    dotted, "'mbs.solver.time_step' must be a finite number and be positive (s), got inf";
+    ``where``: the key's table as the scene writes it ('[mbs.solver]', 'FILE: [mbs.solver]')."""
+    prefix, _, header = where.rpartition("[")
+    return f"{prefix}'{header.removesuffix(']')}.{key}' {requirement}, got {value!r}"
+
+
+def _finite_requirement(field: str, kind: str) -> str:
+    """What a ModelParams field ('speed_rpm', 'solver.time_step') of annotation ``kind`` asks of a
+    value that is inf or NaN: to be finite, and what the model's own refusal of NaN, which no
+    bound holds, asks besides."""
+    if kind.startswith("tuple"):
+        return "must be a list of finite numbers"
+    if kind == "int":
+        return f"must be {_KINDS[kind][1]}"
+    name, _, key = field.partition(".")
+    refusals = table_problems({name: {key: math.nan}} if key else {name: math.nan})
+    asked = next((refusal.allowed for refusal in refusals if refusal.fields[0] == field), None)
+    return "must be a finite number" + (f" and {asked.removeprefix('must ')}" if asked else "")
+
+
+def _infinite(table: dict, cls, where: str, sub: str | None = None) -> dict[str, str]:
+    """The keys of ``table`` (fields of ``cls``, of sub-table ``sub`` of ModelParams) whose
+    number is inf or NaN, each with its sentence (:func:`_finite_sentence`)."""
+    kinds = {field.name: field.type for field in fields(cls) if field.name not in _SUBTABLES}
+    return {key: _finite_sentence(where, key, value,
+                                  _finite_requirement(key if sub is None else f"{sub}.{key}", kinds[key]))
+            for key, value in table.items() if key in kinds and _not_finite(value)}
+
+
 def _mistyped(table: dict, cls) -> dict[str, str]:
     """The keys of ``table`` whose value is not of their ``cls`` field's kind, each with that kind."""
     found = {}
@@ -100,10 +138,13 @@ def _pressure_problems(table, where: str) -> list[str]:
         return [f"{where} must be a table (file, bore, conrod_length, max_order), got {shown(table)}"]
     missing = sorted({"file", "bore", "conrod_length"} - set(table))
     found = [_unknown(table, _PRESSURE_KEYS, where)] + ([f"{where}: missing key(s) {missing}"] if missing else [])
-    found += [f"{where} {key} = {shown(table[key])}: must be a positive number (mm)" if key != "max_order" else
-              f"{where} {key} = {shown(table[key])}: must be a positive number (highest engine order)"
-              for key in ("bore", "conrod_length", "max_order")
-              if key in table and not (_number(table[key]) and table[key] > 0)]
+    for key in ("bore", "conrod_length", "max_order"):
+        meaning = "highest engine order" if key == "max_order" else "mm"
+        if key in table and _not_finite(table[key]):
+            found.append(_finite_sentence(where, key, table[key],
+                                          f"must be a finite number and be positive ({meaning})"))
+        elif key in table and not (_number(table[key]) and table[key] > 0):
+            found.append(f"{where} {key} = {shown(table[key])}: must be a positive number ({meaning})")
     if "file" in table and not isinstance(table["file"], str):
         found.append(f"{where} file = {shown(table['file'])}: must be a string (a CSV file)")
     return [problem for problem in found if problem]
@@ -151,18 +192,23 @@ def _field_values(table: dict, where: str, folder: Path | None) -> tuple[dict, l
     top_fields = {f.name for f in fields(ModelParams)}
     problems = [_unknown(table, top_fields | {"gas_pressure"}, where)]
     mistyped = _mistyped({k: v for k, v in table.items() if k not in _SUBTABLES}, ModelParams)
+    infinite = _infinite(table, ModelParams, where)
     values = {}
     for name, value in table.items():
         sub = _header(where, name)
-        if name == "gas_pressure":
+        if name in infinite:
+            problems.append(infinite[name])
+        elif name == "gas_pressure":
             problems += _pressure_problems(value, sub)
         elif name in _SUBTABLES and not isinstance(value, dict):
             problems.append(f"{where} {name} = {shown(value)}: must be a table, {sub.rpartition(': ')[2]}")
         elif name in _SUBTABLES:
             allowed = {f.name for f in fields(_SUBTABLES[name])}
             problems.append(_unknown(value, allowed, sub))
-            wrong = _mistyped(value, _SUBTABLES[name])
-            problems += [f"{sub} {key} = {shown(value[key])}: must be {kind}" for key, kind in wrong.items()]
+            not_finite = _infinite(value, _SUBTABLES[name], sub, name)
+            wrong = {**_mistyped(value, _SUBTABLES[name]), **not_finite}
+            problems += [not_finite.get(key) or f"{sub} {key} = {shown(value[key])}: must be {kind}"
+                         for key, kind in wrong.items()]
             value = {k: v for k, v in value.items() if k in allowed and k not in wrong}
             if folder is not None and name == "counterweight" and "mesh_file" in value:
                 value = _with_mesh_digest(value, folder, sub)
