@@ -85,8 +85,9 @@ def scan(evaluate: Callable[[Sequence[float]], dict], low_mm: float, high_mm: fl
     """Scan ``grid`` amplitudes over [low_mm, high_mm], then refine every change of verdict.
 
     evaluate: amplitudes (mm) → {amplitude: verdict} for those amplitudes.
-    parallel: amplitudes worth running per round (the workers); each interval that still
-    has to narrow gets an equal share of them, at least one.
+    parallel: amplitudes to run per round; each interval that still has to narrow gets an
+    equal share of them, at least one. Give a number that does not depend on the machine (not
+    the workers): the amplitudes run, and so what is found, depend on it.
     """
     if grid < 2:
         raise ValueError("the scan needs a grid of at least 2 amplitudes")
