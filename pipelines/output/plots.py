@@ -22,6 +22,7 @@ value in the title.
 from __future__ import annotations
 
 import json
+import re
 import textwrap
 import tomllib
 from dataclasses import dataclass
@@ -73,8 +74,11 @@ FIELD_LABELS = {name: quantity.label for name, quantity in QUANTITIES.items()}
 #: fields that mean nothing where a point is open over the whole cycle (status 0): drawn grey
 MEANINGLESS_WHEN_OPEN = ("max_utilised_cof", "slip_range")
 #: the codes of /final/status and /cycles/fields/status, as drawn (results.STATUS_NAMES)
-STATUS = (("open", "0.82"), ("stick", "tab:blue"), ("slip (at the friction limit)", "tab:orange"),
-          ("slip at μ_max", "firebrick"))
+#: "at the friction limit" (|τ| = μ·p at some increment of the cycle), the CLI's and the report's
+#: words, not "slip": such a point need not move (a stuck joint shows it on a quarter of its pads),
+#: and an Abaqus user reads "slip" as CSTATUS slip; what slid is the verdict's measure (cycles.png)
+STATUS = (("open", "0.82"), ("stick", "tab:blue"), ("at the friction limit (|τ| = μp)", "tab:orange"),
+          ("at the friction limit with μ = μ_max", "firebrick"))
 OPEN_COLOUR = STATUS[0][1]
 
 #: the status of the cycle's last increment ("at the friction limit": |τ| = μ·p, which a point
@@ -82,8 +86,8 @@ OPEN_COLOUR = STATUS[0][1]
 #: what still slid over the cycle, the verdict's measure (:func:`contact.verdict.active_slip_area_fraction`)
 AREA_LABELS = {
     "stick_area_fraction": "stick (below the friction limit)",
-    "slip_area_fraction": "at the friction limit",
-    "active_slip_area_fraction": "sliding in the cycle (verdict)",
+    "slip_area_fraction": "at the friction limit (|τ| = μp; need not move)",
+    "active_slip_area_fraction": "sliding in the cycle (the verdict's measure)",
     "damaged_area_fraction": "at the friction limit with μ = μ_max (damaged)",
     "worn_area_fraction": "worn",
     "cof_evolved_area_fraction": "COF evolved",
@@ -232,10 +236,17 @@ def _title(inches: float, *lines: str) -> str:
     return "\n".join(_wrap(line, int(TITLE_CHARACTERS_PER_INCH * inches)) for line in lines if line)
 
 
+#: phrases a wrapped title or label keeps on one line ("end of / run" read as two things)
+UNBROKEN = re.compile(r"end of (?:the COF phase|the last recorded|cycle \d+|run)|at the friction limit"
+                      r"|μ = μ_max|\|τ\| = μ·?p|round-off below \S+ \S+|max \S+ \S+")
+
+
 def _wrap(text: str, width: int) -> str:
-    """``text`` in lines of ``width`` characters, broken at spaces only: a mathtext "$...$"
-    split across lines is drawn as its source."""
-    return textwrap.fill(text, width, break_long_words=False, break_on_hyphens=False)
+    """``text`` in lines of ``width`` characters, broken at spaces only (a mathtext "$...$"
+    split across lines is drawn as its source) and not inside the phrases of :data:`UNBROKEN`."""
+    kept = UNBROKEN.sub(lambda match: match.group(0).replace(" ", "\u00a0"), text)
+    wrapped = textwrap.fill(kept, width, break_long_words=False, break_on_hyphens=False)
+    return wrapped.replace("\u00a0", " ")
 
 
 def _plane_axes(coordinates: np.ndarray) -> tuple[int, int]:
@@ -403,13 +414,14 @@ def _map(mesh, field: Field, a, b, title, target, stop: str | None = None, *,
 def _status_map(mesh, status: np.ndarray, a, b, title, target, stop: str | None = None) -> Path:
     """The contact status over the cycle (:data:`STATUS`), each facet drawn in the worst status
     of its corners."""
-    fig, ax, wide = _map_axes(mesh, title, stop, "slip: at the friction limit during the cycle (|τ| = μ·p)")
+    fig, ax, wide = _map_axes(mesh, title, stop, "at the friction limit: |τ| = μ·p at some increment of the cycle, "
+                              "which a point reaches without sliding; what slid: cycles.png, the verdict's measure")
     codes = status[mesh.triangles].max(axis=1)
     mappable = ax.tripcolor(mesh, facecolors=codes.astype(float),
                             cmap=ListedColormap([colour for _, colour in STATUS]),
                             norm=BoundaryNorm(np.arange(len(STATUS) + 1) - 0.5, len(STATUS)), edgecolors="none")
     bar = _colour_bar(fig, ax, mappable, wide, "contact status over the cycle", a, b, ticks=range(len(STATUS)))
-    bar.set_ticklabels(["open", "stick", "slip", "slip at μ_max"])
+    bar.set_ticklabels([_wrap(name, 22) for name, _ in STATUS], fontsize=8)
     return _save(fig, target)
 
 
@@ -621,7 +633,7 @@ def _area_panel(ax, figures, equivalent: np.ndarray) -> None:
         ax.plot(equivalent, values, linestyle=style, marker=marker, markersize=4, markerfacecolor="none",
                 markevery=(0.1 * k / len(AREA_LABELS), 0.1), label=name, color=f"C{k}")
     if zero:
-        ax.plot([], [], " ", label=textwrap.fill("zero throughout: " + ", ".join(zero), 42))
+        ax.plot([], [], " ", label=_wrap("zero throughout: " + ", ".join(zero), 42))
     ax.set_ylabel("area / nominal area [-]")
     # above 1 where wear or a moving patch brings points beyond the preload's area into contact
     largest = max((np.nanmax(figures[key][()], initial=0.0) for key in AREA_LABELS if key in figures), default=1.0)

@@ -119,7 +119,22 @@ def test_points_open_over_the_cycle_are_grey_not_zero(tmp_path, drawn):
     assert (low, high) == pytest.approx((closed.min(), closed.max())) and low > 0.1
     assert "status_map.png" in drawn
     labels = [t.get_text() for t in drawn["status_map.png"].axes[1].get_xticklabels()]
-    assert labels == ["open", "stick", "slip", "slip at μ_max"]
+    # the CLI's and the report's words: a point at the friction limit need not move ("slip" is
+    # what an Abaqus user reads as CSTATUS slip)
+    assert [label.replace("\n", " ") for label in labels] == [
+        "open", "stick", "at the friction limit (|τ| = μp)", "at the friction limit with μ = μ_max"]
+    assert not any("slip" in label for label in labels)
+
+
+@pytest.mark.parametrize("width", range(8, 60))
+def test_titles_keep_their_phrases_on_one_line(width):
+    """A title wrapped to any width breaks between words but never inside "end of run" (QA: the
+    FFDP map's title read "end of / run") nor "at the friction limit"."""
+    text = "counterweight: fretting fatigue FFDP $\\sigma_t$, end of run, at the friction limit"
+    lines = plots._wrap(text, width).split("\n")
+    assert " ".join(lines) == text
+    assert any("end of run" in line for line in lines)
+    assert any("at the friction limit" in line for line in lines)
 
 
 def _cycles(tmp_path, monkeypatch, real, phase, figures, clamp=None, depth=None):
