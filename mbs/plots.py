@@ -67,16 +67,21 @@ def plot_time_history(histories: RunHistories, path, *, scene: str | None = None
 
 
 def plot_spectrum(spectrum: Spectrum, path, *, xlabel: str = "frequency (Hz)", title: str = "",
-                  x_max: float | None = None) -> Path:
-    """Amplitude spectrum (micrometres) on a log scale, up to x_max (default: Nyquist)."""
-    figure, ax = plt.subplots(figsize=(8, 4))
+                  x_max: float | None = None, calibration: float | None = None) -> Path:
+    """Amplitude spectrum (micrometres) on a log scale, up to x_max (default: Nyquist): the
+    multibody model's raw amplitudes, and said to be on the axis and under the title.
+    calibration: the factor a coupled scene multiplies them by (:func:`mbs.run.calibration`), named
+    under the title."""
+    figure, ax = plt.subplots(figsize=(8, 4.3))
     amplitude = np.atleast_2d(np.asarray(spectrum.amplitude).T).T
     shown = spectrum.frequency <= (np.inf if x_max is None else x_max)
     for k in range(amplitude.shape[1]):
         ax.semilogy(spectrum.frequency[shown], 1e3 * amplitude[shown, k] + 1e-12, lw=0.8, label=f"CW{k + 1}")
     ax.set_xlabel(xlabel)
-    ax.set_ylabel("amplitude (µm)")
-    ax.set_title(title)
+    ax.set_ylabel("multibody amplitude,\nraw (µm)")
+    raw = ("the multibody model's raw amplitudes, uncalibrated" if calibration is None else
+           f"the multibody model's raw amplitudes; the scene's coupling multiplies them by {calibration:.4g}")
+    ax.set_title(f"{title}\n{raw}" if title else raw, fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     return _save(figure, path)

@@ -71,17 +71,21 @@ def run_model(params: ModelParams, out_dir, *, bodies: tuple | None = None, camp
     campbell = campbell_diagram(reduced, speeds, orders, system_frequencies=system_frequencies)
     shaft_hz = params.speed_rpm / 60.0
     f_max = 1.25 * max(reduced.eigenfrequencies.max(), (orders.max() if orders.size else 0.0) * shaft_hz)
+    factor = calibration(histories, stated_wing_amplitude_mm, counterweight)
+    named = f"{scene}: " if scene else ""
     plots = {
         "time_history": plot_time_history(histories, out_dir / "wing_time_history.png", scene=scene,
-                                          calibration=calibration(histories, stated_wing_amplitude_mm, counterweight)),
+                                          calibration=factor),
         "spectrum": plot_spectrum(spectra["wing_torsion"], out_dir / "wing_spectrum.png",
-                                  title=f"wing torsion, {params.speed_rpm:g} rpm", x_max=f_max),
+                                  title=f"{named}wing torsion spectrum at {params.speed_rpm:g} rpm", x_max=f_max,
+                                  calibration=factor),
         "campbell": plot_campbell(campbell, out_dir / "campbell.png", operating_rpm=params.speed_rpm),
     }
     if "wing_torsion_orders" in spectra:
         plots["order_spectrum"] = plot_spectrum(spectra["wing_torsion_orders"], out_dir / "wing_order_spectrum.png",
-                                                xlabel="engine order (cycles per revolution)", title="wing torsion, order spectrum",
-                                                x_max=f_max / shaft_hz)
+                                                xlabel="engine order (cycles per revolution)",
+                                                title=f"{named}wing torsion order spectrum at {params.speed_rpm:g} rpm",
+                                                x_max=f_max / shaft_hz, calibration=factor)
     # last: a run interrupted before its end leaves no results file (plots without one are not a result)
     results_file = write_run(out_dir / "run.h5", params, reduced, histories, spectra, campbell)
     return RunOutputs(histories=histories, reduced=reduced, spectra=spectra, campbell=campbell,

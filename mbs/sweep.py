@@ -1,4 +1,4 @@
-"""Engine-speed sweep: wing amplitude and dominant frequencies per speed, resonance crossings.
+"""Engine-speed sweep: wing amplitude and dominant frequencies per speed, order/mode crossings.
 
 Each speed is one case (:func:`run_speed`): a fixed-step run of the model plus the coupled
 eigenfrequencies at that speed. :func:`collect_sweep` gathers the cases into a
@@ -39,7 +39,8 @@ class SweepResult:
     CW1 wing torsion, strongest first; dominant_orders (n, 3) the same in engine orders;
     real_time_factor (n,); system_frequencies (n, N_SYSTEM_MODES) Hz: coupled model eigenfrequencies;
     crossings: engine-order lines meeting system modes (dicts: order, mode, speed_rpm,
-    frequency_hz); resonance: (n,) True where a crossing lies within half a sweep step;
+    frequency_hz); resonance: (n,) True where a crossing lies within half a sweep step (a crossing:
+    a resonance only where the amplitude peaks there; the name kept for compatibility);
     failures: {speed_rpm: message}; campbell: the Campbell diagram (reduced CW and system).
     unsettled_change (n,): how far each run was from steady (:func:`mbs.histories.unsettled_change`;
     NaN where the run was too short to tell or failed); unsettled: {speed_rpm: message} for the
@@ -164,12 +165,18 @@ def write_sweep(path, result: SweepResult) -> Path:
         group = root.create_group("sweep")
         fields = [
             ("speed", result.speeds_rpm, "rpm", "Engine speeds of the sweep."),
-            ("wing_amplitude", result.wing_amplitude, "mm", "Wing torsion amplitude of CW1, CW2, ... (NaN: failed)."),
+            ("wing_amplitude", result.wing_amplitude, "mm",
+             "Wing torsion amplitude (half peak-to-peak over the steady second half) of CW1, CW2, ... "
+             "as the multibody model computes it: raw, uncalibrated (a coupled scene scales it to its "
+             "stated wing amplitude) (NaN: failed)."),
             ("dominant_frequencies", result.dominant_frequencies, "Hz", "Strongest CW1 wing-torsion frequencies."),
             ("dominant_orders", result.dominant_orders, "order", "The same frequencies in engine orders."),
             ("real_time_factor", result.real_time_factor, "1", "Simulated seconds per wall-clock second."),
             ("system_frequencies", result.system_frequencies, "Hz", "Coupled model eigenfrequencies per speed."),
-            ("resonance", result.resonance.astype(np.int8), "1", "1 where an order line crosses a mode."),
+            ("resonance", result.resonance.astype(np.int8), "1",
+             "1 at a speed within half a sweep step of an order/mode crossing (crossings_json): a "
+             "crossing, not a shown resonance, which is only where wing_amplitude peaks at the "
+             "crossing; the dataset keeps the name 'resonance' for compatibility."),
         ]
         if result.unsettled_change is not None:
             fields.append(("unsettled_change", result.unsettled_change, "1",

@@ -152,16 +152,33 @@ def add_sweep_parser(subparsers):
     return parser
 
 
-def _table(result) -> str:
-    lines = [f"{'rpm':>8} {'CW1 wing µm':>12} {'CW2 wing µm':>12} {'f1 Hz':>9} {'f2 Hz':>9}  note"]
+def _table(result, calibration: tuple[float | None, str] = (None, ""), counterweight: int = 1) -> str:
+    """The sweep for a reader: the multibody model's raw wing amplitudes per speed (µm) and, when
+    the scene calibrates them (:func:`sweep_calibration`), its coupled CW's (``counterweight``,
+    1 = first) calibrated amplitude beside them, where that factor comes from said under the table."""
+    factor, note = calibration
+    if not 1 <= counterweight <= result.wing_amplitude.shape[1]:
+        factor = None
+    header = f"{'rpm':>8} {'CW1 raw µm':>11} {'CW2 raw µm':>11}"
+    if factor is not None:
+        header += f" {f'CW{counterweight} scene µm':>14}"
+    lines = [header + f" {'f1 Hz':>9} {'f2 Hz':>9}  note"]
     for i, speed in enumerate(result.speeds_rpm):
         amplitude = 1e3 * result.wing_amplitude[i]
         f = result.dominant_frequencies[i]
-        note = "FAILED: " + result.failures[float(speed)] if float(speed) in result.failures else (
+        remark = "FAILED: " + result.failures[float(speed)] if float(speed) in result.failures else (
             "NOT STEADY (amplitude not to be trusted)" if float(speed) in (result.unsettled or {}) else
             "order/mode crossing" if result.resonance[i] else "")
-        lines.append(f"{speed:8.1f} {amplitude[0]:12.3f} {amplitude[1]:12.3f} {f[0]:9.1f} {f[1]:9.1f}  {note}")
-    return "\n".join(lines + crossing_lines(result))
+        line = f"{speed:8.1f} {amplitude[0]:11.3f} {amplitude[1]:11.3f}"
+        if factor is not None:
+            line += f" {factor * amplitude[counterweight - 1]:14.1f}"
+        lines.append(line + f" {f[0]:9.1f} {f[1]:9.1f}  {remark}")
+    legend = ["raw: the multibody model's own wing torsion amplitude (half peak-to-peak), uncalibrated"]
+    if factor is not None:
+        legend.append(f"scene: raw × {factor:.4g}, the amplitude the scene's coupling applies ({note})")
+    elif note:
+        legend.append(f"calibration: {note}")
+    return "\n".join(lines + legend + crossing_lines(result))
 
 
 def crossing_lines(result: SweepResult) -> list[str]:
@@ -208,12 +225,12 @@ def run_sweep(args) -> int:
     except InputError as error:
         print(f"fretwork: error: {error}", file=sys.stderr)
         return 2
-    summary = sweep_summary(result, path, Path(args.plots) if args.plots else folder,
-                            calibration=sweep_calibration(result, args.scene, params.speed_rpm))
+    calibration = sweep_calibration(result, args.scene, params.speed_rpm)
+    summary = sweep_summary(result, path, Path(args.plots) if args.plots else folder, calibration=calibration)
     if args.json:
         print(json_text(summary))
     else:
-        print(_table(result))
+        print(_table(result, calibration, scene_calibration(args.scene)[2]))
         print(f"results: {path}, plots: {', '.join(summary['plots'].values())}")
     for message in (result.unsettled or {}).values():
         print(f"fretwork: warning: {message}", file=sys.stderr)
