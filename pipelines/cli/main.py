@@ -106,6 +106,23 @@ def _clamp_still_falling(s: dict) -> str | None:
             "levels off or loosens needs a longer run (raise wear_cycles or life_cycles)")
 
 
+def loss_percent(fraction: float) -> str:
+    """A loss fraction in percent with two significant digits when small (5.2e-5 -> '0.0052'),
+    two decimals otherwise (0.0319 -> '3.19'): a small loss is not rounded up or to nothing."""
+    percent = 100 * fraction
+    decimals = 2 if abs(percent) >= 0.1 or percent == 0 else 1 - int(np.floor(np.log10(abs(percent))))
+    return f"{percent:.{decimals}f}"
+
+
+def _damage_maximum(name: str, value: float, units: str, location) -> str:
+    """'FDP max 3.2 MPa·mm at [x, y, z] mm', each maximum at its own location; no location where
+    the maximum is 0 (no point holds it more than another)."""
+    text = f"{name} max {value:.4g} {units}"
+    if value and location is not None:
+        text += f" at {np.round(location, 2).tolist()} mm"
+    return text
+
+
 def _human_summary(outcome) -> str:
     s = outcome.summary
     lines = [f"scene {s['scene']}: verdict {s['verdict'].upper()}"
@@ -126,7 +143,7 @@ def _human_summary(outcome) -> str:
                         f"one load cycle = {s['load_cycle'].replace('_', ' ')} ({s['load_cycle_frequency_hz']:.0f} Hz)")
     if s.get("bolt_force_initial_N") is not None:
         lines.append(f"  clamp force {s['bolt_force_initial_N'] / 1e3:.4g} kN -> {s['bolt_force_final_N'] / 1e3:.4g} kN "
-                     f"({100 * s['clamp_force_loss_fraction']:.2f} % loss)")
+                     f"({loss_percent(s['clamp_force_loss_fraction'])} % loss)")
     if s.get("equivalent_engine_hours") is not None:
         when = [f"{what} after {s[key + '_cycles']:.3g} cycles ({s[key + '_engine_hours']:.3g} h)"
                 for what, key in (("shakedown", "shakedown_at"), ("loosening evident", "loosening_evident_at"))
@@ -141,8 +158,8 @@ def _human_summary(outcome) -> str:
         lines.append(f"  smallest stick margin of stuck points: {s['min_stick_margin']:.3f} (1 − max |τ|/p / μ_max: "
                      "against the COF sliding can raise a point to, not against its present COF)")
     if s.get("fdp_max_MPa_mm") is not None:
-        lines.append(f"  fretting damage: FDP max {s['fdp_max_MPa_mm']:.4g} MPa·mm, FFDP max {s['ffdp_max_MPa2_mm']:.4g} "
-                     f"MPa²·mm at {np.round(s['ffdp_max_location_mm'], 2).tolist()} mm")
+        lines.append("  fretting damage: " + _damage_maximum("FDP", s["fdp_max_MPa_mm"], "MPa·mm", s.get("fdp_max_location_mm"))
+                     + ", " + _damage_maximum("FFDP", s["ffdp_max_MPa2_mm"], "MPa²·mm", s.get("ffdp_max_location_mm")))
     from contact.verdict import VERDICT_MEANINGS
 
     lines.insert(1, f"  {s['verdict']}: {VERDICT_MEANINGS.get(s['verdict'], '')}")
@@ -248,12 +265,12 @@ def cmd_sweep(args) -> int:
     # plot with the margins' calibration
     swept = sweep_summary(sweep, out, plots, calibration=_margins_calibration(scene, params.speed_rpm, result))
     plot = plot_margins(result, plots / "margins.png", f"{scene.name}: fretting safety margin")
-    summary = dict(result.to_json(), file=str(out), plot=str(plot), limit_plot=str(limit_runs / "limit.png"),
-                   limit_file=str(limit_runs / "limit.json"), sweep=swept)
+    summary = dict(result.to_json(), margins=describe_margins(result), file=str(out), plot=str(plot),
+                   limit_plot=str(limit_runs / "limit.png"), limit_file=str(limit_runs / "limit.json"), sweep=swept)
     if args.json:
         print(json_text(summary))
     else:
-        print(f"{'rpm':>8} {'wing µm':>9} {'margin':>8}")
+        print(f"{'rpm':>8} {f'CW{result.counterweight} µm':>9} {'margin':>8}")
         flags = {"unsafe": "  < 1: UNSAFE", "at the limit": "  at the limit (within the tolerance)", "safe": "",
                  "not judged": "  not judged: the multibody run failed"}
         for k, (speed, amplitude, margin) in enumerate(zip(result.speeds_rpm, result.wing_amplitude_mm, result.margin)):

@@ -18,12 +18,19 @@ measured one at the scene's engine speed), every sweep amplitude is scaled by th
 multibody model is calibrated once, at one speed, as the paper's model was calibrated
 against acceleration measurements.
 
+What the sampled speeds do not show is said (:func:`describe_margins`): order/mode crossings
+between two sampled speeds, farther than a tenth of the step from both (the amplitude peaks
+there, unjudged: the result is then "safe at the sampled speeds"), the unsampled edge of an
+unsafe band, which CW is judged (``[coupling] counterweight``) and where another CW's raw
+multibody amplitude exceeds it (a ratio of raw amplitudes, no calibration assumed).
+
 The limit is searched at the highest sweep speed: the centrifugal load, which lowers the
 clamp force, is then largest, so the one limit is conservative for every speed of the sweep.
 """
 
 from __future__ import annotations
 
+import json
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
@@ -43,7 +50,10 @@ class MarginResult:
     multibody amplitudes; limit: the amplitude limit; margin (n,) = limit.margin_limit_mm /
     amplitude, the largest amplitude shown to stick over the wing amplitude.
     warnings: why some amplitudes are not to be trusted (a multibody run, of the sweep or of the
-    calibration, that had not settled where its amplitude was measured)."""
+    calibration, that had not settled where its amplitude was measured).
+    counterweight: the CW judged (1-based, ``[coupling] counterweight``); crossings_rpm: the
+    sweep's order/mode crossings (rpm); multibody_amplitude_mm (n, number of CWs): every CW's
+    multibody amplitude, uncalibrated (None: not known)."""
 
     speeds_rpm: np.ndarray
     wing_amplitude_mm: np.ndarray
@@ -52,6 +62,21 @@ class MarginResult:
     margin: np.ndarray
     limit_speed_rpm: float
     warnings: tuple = ()
+    counterweight: int = 1
+    crossings_rpm: tuple = ()
+    multibody_amplitude_mm: np.ndarray | None = None
+
+    @property
+    def unsampled_crossings(self) -> list:
+        """The crossings (rpm) between two sampled speeds and farther than a tenth of that step
+        from both: the amplitude peaks there, and no margin was computed near it."""
+        return crossings_between(self.speeds_rpm, self.crossings_rpm)
+
+    @property
+    def larger_swings(self) -> list:
+        """(CW, speed rpm, ratio) where another CW's multibody amplitude exceeds the judged one's:
+        ratios of raw amplitudes, no calibration assumed."""
+        return larger_swings(self.speeds_rpm, self.multibody_amplitude_mm, self.counterweight)
 
     @property
     def failed(self) -> np.ndarray:
@@ -101,7 +126,106 @@ class MarginResult:
             "smallest_margin_speed_rpm": None if not np.isfinite(self.margin).any()
             else float(self.speeds_rpm[int(np.nanargmin(self.margin))]),
             "warnings": list(self.warnings),
+            "counterweight": self.counterweight,
+            "crossings_between_speeds_rpm": self.unsampled_crossings,
+            "larger_swings": [{"counterweight": cw, "speed_rpm": speed, "ratio": ratio}
+                              for cw, speed, ratio in self.larger_swings],
         }
+
+
+#: A crossing this close to a sampled speed, as a fraction of the step, counts as sampled.
+SAMPLED_FRACTION = 0.1
+
+
+def crossings_between(speeds_rpm, crossings_rpm) -> list:
+    """The crossings (rpm, sorted, unique to 0.1 rpm) inside the sampled range but farther than
+    :data:`SAMPLED_FRACTION` of the local step from both neighbouring sampled speeds."""
+    speeds = np.unique(np.asarray(speeds_rpm, dtype=float))
+    found = set()
+    for crossing in crossings_rpm:
+        above = int(np.searchsorted(speeds, crossing))
+        if above == 0 or above == len(speeds):
+            continue
+        low, high = speeds[above - 1], speeds[above]
+        if min(crossing - low, high - crossing) > SAMPLED_FRACTION * (high - low):
+            found.add(round(float(crossing), 1))
+    return sorted(found)
+
+
+def larger_swings(speeds_rpm, amplitude_mm, counterweight: int) -> list:
+    """(CW, speed rpm, ratio) for every sampled speed where CW number ``CW`` (1-based) has a larger
+    multibody amplitude than ``counterweight``: ratio = its amplitude / the judged one's."""
+    if amplitude_mm is None:
+        return []
+    amplitude = np.asarray(amplitude_mm, dtype=float)
+    judged = amplitude[:, counterweight - 1]
+    found = []
+    for other in range(amplitude.shape[1]):
+        if other == counterweight - 1:
+            continue
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = amplitude[:, other] / judged
+        for k in np.flatnonzero(np.isfinite(ratio) & (ratio > 1.0)):
+            found.append((other + 1, float(speeds_rpm[k]), float(ratio[k])))
+    return found
+
+
+def _ratio(value: float) -> str:
+    text = f"{value:.2f}"
+    return text if text != "1.00" else f"{value:.4f}"
+
+
+def _finer(speeds_rpm, crossing: float) -> str:
+    """A sweep finer around one crossing: from the sampled speed below it to the one above, a
+    tenth of that step (rounded to whole rpm, at least 1)."""
+    speeds = np.unique(np.asarray(speeds_rpm, dtype=float))
+    above = int(np.searchsorted(speeds, crossing))
+    low, high = speeds[above - 1], speeds[above]
+    return f"{low:g}:{high:g}:{max(1, round((high - low) / 10)):g}"
+
+
+def crossings_sentence(speeds_rpm, crossings: list) -> str:
+    """What the crossings between the sampled speeds mean, or '' when there are none."""
+    if not crossings:
+        return ""
+    listed_ = ", ".join(f"{c:.1f}" for c in crossings)
+    return (f"order/mode crossing{'s' if len(crossings) > 1 else ''} at {listed_} rpm "
+            f"fall{'' if len(crossings) > 1 else 's'} between the sampled speeds: the margins there are not judged; "
+            f"sweep finer around them (e.g. --speeds {_finer(speeds_rpm, crossings[0])})")
+
+
+def judged_sentence(counterweight: int | None) -> str:
+    """Which CW the margins judge, or '' when not known (a file of before it was written)."""
+    return "" if counterweight is None else \
+        f"the margins judge CW{counterweight} ([coupling] counterweight = {counterweight})"
+
+
+def swings_sentence(swings: list, counterweight: int) -> str:
+    """Where another CW swings more than the judged one, per CW, or '' where none does."""
+    parts = []
+    for other in sorted({cw for cw, _, _ in swings}):
+        at = ", ".join(f"{_ratio(ratio)}× CW{counterweight} at {speed:.0f} rpm"
+                       for cw, speed, ratio in swings if cw == other)
+        parts.append(f"CW{other} swings {at}: judge it with [coupling] counterweight = {other}")
+    return "; ".join(parts)
+
+
+def band_edges(speeds_rpm, states) -> list:
+    """(below, above) rpm pairs of neighbouring sampled speeds, one unsafe and the other safe:
+    the edge of the unsafe band lies between them, not sampled."""
+    order = np.argsort(speeds_rpm)
+    speeds, states = np.asarray(speeds_rpm, dtype=float)[order], [states[k] for k in order]
+    return [(float(speeds[k]), float(speeds[k + 1])) for k in range(len(speeds) - 1)
+            if {states[k], states[k + 1]} == {"unsafe", "safe"}]
+
+
+def edges_sentence(edges: list) -> str:
+    """'(the unsafe band's edge lies between 600 and 650 rpm, not sampled)' or ''."""
+    if not edges:
+        return ""
+    between = " and ".join(f"between {low:.0f} and {high:.0f} rpm" for low, high in edges)
+    return (f"(the unsafe band's edge lies {between}, not sampled)" if len(edges) == 1
+            else f"(the unsafe bands' edges lie {between}, not sampled)")
 
 
 def _rpm(speeds) -> str:
@@ -121,16 +245,21 @@ def margin_basis(result: MarginResult) -> str:
     if limit.margin_bound == "upper bound":
         return (f"not stuck even at {_um(result, limit.margin_limit_mm)} µm, the bottom of the searched range "
                 f"({searched}): the margins are upper bounds")
-    return f"sticks up to {_um(result, limit.bracket_mm[0])} µm (not at {_um(result, limit.limit_mm)} µm), {searched}"
+    return f"sticks up to {_um(result, limit.bracket_mm[0])} µm, not at {_um(result, limit.limit_mm)} µm ({searched})"
 
 
 def describe_margins(result: MarginResult) -> str:
-    """One line: the unsafe speeds (margin below 1) and those at the limit, or that all are safe;
-    margins that are bounds are said to be."""
+    """One line: which CW is judged; the unsafe speeds (margin below 1, with the unsampled edges
+    of their band) and those at the limit, or that all are safe — "at the sampled speeds" where
+    order/mode crossings fall between them, which are listed; margins that are bounds are said to
+    be; other CWs that swing more than the judged one."""
+    states = [result.state(k) for k in range(len(result.speeds_rpm))]
     unsafe, at_limit = result.speeds_rpm[result.unsafe], result.speeds_rpm[result.at_limit & ~result.unsafe]
     failed = result.speeds_rpm[result.failed]
+    safe = np.array([state == "safe" for state in states], dtype=bool)
     bound = result.limit.margin_bound
     stuck = f"{_um(result, result.limit.margin_limit_mm)} µm"
+    crossings = result.unsampled_crossings
     parts = []
     if failed.size:
         parts.append(f"NOT JUDGED at {_rpm(failed)}: the multibody run failed there (the sweep's failures), "
@@ -139,17 +268,22 @@ def describe_margins(result: MarginResult) -> str:
         exceeded = {"stuck": f"{stuck}, the largest amplitude shown to stick",
                     "lower bound": f"{stuck}, the top of the searched range, all of which stuck",
                     "upper bound": f"{stuck}, the bottom of the searched range, which did not stick"}[bound]
-        parts.append(f"UNSAFE at {_rpm(unsafe)}: the wing vibration exceeds {exceeded} (margin below 1)")
+        edges = edges_sentence(band_edges(result.speeds_rpm, states))
+        parts.append(f"UNSAFE at {_rpm(unsafe)}: the wing vibration exceeds {exceeded} (margin below 1)"
+                     + (f" {edges}" if edges else ""))
     if at_limit.size:
         parts.append(f"not shown safe at {_rpm(at_limit)}: nothing in the searched range stuck" if bound == "upper bound"
                      else f"at the limit at {_rpm(at_limit)} (within the limit's tolerance of its bracket)")
     if not parts:
-        said = "safe at every speed (every margin at least 1)"
+        said = f"safe at {'the sampled' if crossings else 'every'} speed{'s' if crossings else ''} (every margin at least 1)"
     else:
-        said = "; ".join(parts) + ("; safe at the others" if failed.size and not (unsafe.size or at_limit.size)
-                                   and failed.size < len(result.speeds_rpm) else "")
+        said = "; ".join(parts) + (f"; safe at the {'other sampled speeds' if crossings else 'others'}" if safe.any() else "")
     if bound != "stuck":
         said += f"; the margins are {bound}s ({'the whole range stuck' if bound == 'lower bound' else 'nothing stuck'})"
+    for sentence in (crossings_sentence(result.speeds_rpm, crossings), judged_sentence(result.counterweight),
+                     swings_sentence(result.larger_swings, result.counterweight)):
+        if sentence:
+            said += f"; {sentence}"
     if result.warnings:
         said += f"; WARNING, {len(result.warnings)} amplitude(s) not to be trusted: " + " | ".join(result.warnings)
     return said
@@ -211,7 +345,10 @@ def margins_of(scene, sweep, limit: LimitResult, cache) -> MarginResult:
     speeds = np.asarray(sweep.speeds_rpm, dtype=float)
     warnings = [f"calibration: {calibration_warning}"] if calibration_warning else []
     warnings += list((sweep.unsettled or {}).values())
-    return MarginResult(speeds, amplitude, factor, limit, margin, float(speeds.max()), tuple(warnings))
+    return MarginResult(speeds, amplitude, factor, limit, margin, float(speeds.max()), tuple(warnings),
+                        counterweight=counterweight + 1,
+                        crossings_rpm=tuple(float(c["speed_rpm"]) for c in getattr(sweep, "crossings", ())),
+                        multibody_amplitude_mm=np.asarray(sweep.wing_amplitude, dtype=float))
 
 
 def write_margins(path, result: MarginResult) -> None:
@@ -233,6 +370,9 @@ def write_margins(path, result: MarginResult) -> None:
         group.attrs["limit_mm"] = np.nan if result.limit.limit_mm is None else result.limit.limit_mm
         group.attrs["margin_amplitude_mm"] = result.limit.margin_limit_mm
         group.attrs["margin_bound"] = result.limit.margin_bound
+        group.attrs["counterweight"] = result.counterweight
+        group.attrs["crossings_between_speeds_rpm"] = np.asarray(result.unsampled_crossings, dtype=float)
+        group.attrs["larger_swings_json"] = json.dumps(result.to_json()["larger_swings"])
 
 
 def plot_margins(result: MarginResult, path: Path, title: str) -> Path:

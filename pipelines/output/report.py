@@ -433,13 +433,13 @@ def _limit_sentence(facts: dict, speed_rpm: float | None, why_speed: str = "") -
     searched = "" if searched == " ()" else searched
     if facts["limit_mm"] is None:
         top = f" {_um(high, tolerance)}" if high is not None else ""
-        return (f"Amplitude limit: above the searched range, the joint stuck up to{top}{searched}; "
+        return (f"Sticks over the whole searched range, up to{top}{searched}: the amplitude limit lies above it; "
                 "margins are lower bounds.")
-    text = f"Amplitude limit {_um(facts['limit_mm'], tolerance)}: "
-    if facts["stuck_mm"] is not None:
-        text += f"stuck at {_um(facts['stuck_mm'], tolerance)}, not stuck at {_um(facts['limit_mm'], tolerance)}"
+    limit = _um(facts["limit_mm"], tolerance)
+    if facts["stuck_mm"] is not None:  # what the margins divide first: the limit is not an allowable
+        text = f"Sticks up to {_um(facts['stuck_mm'], tolerance)}, not at {limit}, the amplitude limit"
     else:
-        text += "not stuck even at the bottom of the searched range: the limit lies below it"
+        text = f"Not stuck even at {limit}, the bottom of the searched range: the amplitude limit lies below it"
     text += searched + "."
     if not facts["monotone"]:
         text += " NOT MONOTONE: the joint sticks again above the limit (the search's runs below)."
@@ -520,6 +520,9 @@ class Margins:
     calibration: float
     margin_amplitude_mm: float | None = None  # what the margins divide; None in files of before 3efc5ce
     margin_bound: str | None = None  # "stuck", "lower bound", "upper bound" (LimitResult.margin_bound)
+    counterweight: int | None = None  # the CW judged; None in files of before it was written
+    crossings_between_rpm: tuple = ()  # order/mode crossings between the sampled speeds
+    larger_swings: tuple = ()  # (CW, speed rpm, ratio): another CW swings more than the judged one
 
 
 def _read_sweep(path: Path) -> tuple[Margins | None, dict | None]:
@@ -532,10 +535,15 @@ def _read_sweep(path: Path) -> tuple[Margins | None, dict | None]:
             limit = float(group.attrs.get("limit_mm", np.nan))
             divided = group.attrs.get("margin_amplitude_mm")
             bound = group.attrs.get("margin_bound")
+            judged = group.attrs.get("counterweight")
+            swings = json.loads(group.attrs.get("larger_swings_json", "[]"))
             return Margins(group["speed_rpm"][()], group["wing_amplitude"][()], group["margin"][()],
                            limit if np.isfinite(limit) else None, float(group.attrs.get("limit_speed_rpm", np.nan)),
                            float(group.attrs.get("calibration_factor", 1.0)),
-                           None if divided is None else float(divided), None if bound is None else str(bound)), None
+                           None if divided is None else float(divided), None if bound is None else str(bound),
+                           None if judged is None else int(judged),
+                           tuple(float(c) for c in np.atleast_1d(group.attrs.get("crossings_between_speeds_rpm", []))),
+                           tuple((int(w["counterweight"]), float(w["speed_rpm"]), float(w["ratio"])) for w in swings)), None
         if "sweep" not in file:
             return None, None
         group = file["sweep"]
@@ -573,14 +581,17 @@ def job_verdict(m: Margins, facts: dict | None = None) -> str:
     """The job's answer in one sentence, e.g. 'UNSAFE at 600 rpm: margin 0.60 < 1, ...' or 'safe
     at every speed, smallest margin 1.16 at 900 rpm'. facts: the limit's (:func:`_limit_facts`;
     read off ``m`` alone when not given)."""
+    from pipelines.jobs.margins import band_edges, crossings_sentence, edges_sentence, judged_sentence, swings_sentence
+
     facts = facts if facts is not None else _limit_facts(None, None, m)
     states = np.array(_states(m, facts))
     parts = []
     unsafe = states == "unsafe"
     if unsafe.any():
         margins = ", ".join(f"{v:.2f}" for v in m.margin[unsafe])
+        edges = edges_sentence(band_edges(m.speeds_rpm, list(states)))
         parts.append(f"UNSAFE at {_rpm(m.speeds_rpm[unsafe])}: margin{'s' if unsafe.sum() > 1 else ''} {margins} < 1, "
-                     f"the wing vibration exceeds {_divided(facts, m)}")
+                     f"the wing vibration exceeds {_divided(facts, m)}" + (f" {edges}" if edges else ""))
     if (states == "at the limit").any():
         parts.append(f"at the limit at {_rpm(m.speeds_rpm[states == 'at the limit'])}: the wing amplitude lies within "
                      "the limit's tolerance of its bracket")
@@ -595,7 +606,13 @@ def job_verdict(m: Margins, facts: dict | None = None) -> str:
     if safe.any():
         k = np.flatnonzero(safe)[int(np.argmin(m.margin[safe]))]
         smallest = f"smallest margin {m.margin[k]:.2f} at {m.speeds_rpm[k]:.0f} rpm{bound}"
-        parts.append(f"safe at every speed, {smallest}" if safe.all() else f"safe at the others, {smallest}")
+        sampled = " sampled" if m.crossings_between_rpm else ""
+        parts.append(f"safe at {'the sampled' if sampled else 'every'} speed{'s' if sampled else ''}, {smallest}"
+                     if safe.all() else f"safe at the {'other sampled speeds' if sampled else 'others'}, {smallest}")
+    for sentence in (crossings_sentence(m.speeds_rpm, list(m.crossings_between_rpm)), judged_sentence(m.counterweight),
+                     swings_sentence(list(m.larger_swings), m.counterweight or 1)):
+        if sentence:
+            parts.append(sentence)
     return "; ".join(parts)
 
 

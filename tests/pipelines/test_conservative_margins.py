@@ -39,7 +39,8 @@ def test_a_range_that_stuck_throughout_gives_lower_bounds_and_no_limit_to_be_at(
     assert limit.margin_limit_mm == 0.4 and limit.margin_bound == "lower bound"
     np.testing.assert_allclose(result.margin, 0.4 / AMPLITUDE)
     assert not result.at_limit.any() and [result.state(k) for k in range(3)] == ["safe"] * 3
-    assert describe_margins(result).endswith("the margins are lower bounds (the whole range stuck)")
+    assert describe_margins(result).endswith("the margins are lower bounds (the whole range stuck); "
+                                             "the margins judge CW1 ([coupling] counterweight = 1)")
 
 
 def test_a_range_that_never_stuck_gives_upper_bounds_and_calls_no_speed_safe():
@@ -50,7 +51,8 @@ def test_a_range_that_never_stuck_gives_upper_bounds_and_calls_no_speed_safe():
     # 50 µm: a margin of 2 at most; nothing was shown to stick, so it is not safe either
     assert [result.state(k) for k in range(3)] == ["at the limit", "unsafe", "unsafe"]
     said = describe_margins(result)
-    assert "not shown safe at 600 rpm" in said and said.endswith("the margins are upper bounds (nothing stuck)")
+    assert "not shown safe at 600 rpm" in said and said.endswith(
+        "the margins are upper bounds (nothing stuck); the margins judge CW1 ([coupling] counterweight = 1)")
     assert "safe at every speed" not in said
 
 
@@ -60,7 +62,7 @@ def test_the_margins_plot_labels_the_amplitude_it_divides(tmp_path, monkeypatch)
     plot_margins(_margins(LimitResult(0.2, (0.1833, 0.2), 0.025, range_mm=(0.1, 0.4))), tmp_path / "m.png", "t")
     top = kept[0].axes[0]
     labels = [text.get_text().replace("\n", " ") for text in top.get_legend().get_texts()]
-    assert "sticks up to 183.3 µm (not at 200.0 µm), searched at 900 rpm" in labels
+    assert "sticks up to 183.3 µm, not at 200.0 µm (searched at 900 rpm)" in labels
     line = next(line for line in top.get_lines() if line.get_linestyle() == "--")
     assert line.get_ydata()[0] == pytest.approx(183.3)
 

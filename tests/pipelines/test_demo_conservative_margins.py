@@ -37,7 +37,7 @@ def test_the_demo_says_the_margins_divide_the_lower_end_of_the_bracket():
     assert s["margin_amplitude_um"] == pytest.approx(183.3) and s["margin_bound"] == "stuck"
     assert s["margin_at_operating_point"] == pytest.approx(0.1833 / 0.15)
     said = describe(result)
-    assert "sticks up to 183.3 µm (not at 200.0 µm), searched at 900 rpm: margin 1.22 at the operating point" in said
+    assert "sticks up to 183.3 µm, not at 200.0 µm (searched at 900 rpm): margin 1.22 at the operating point" in said
     assert "amplitude limit 200" not in said
     assert json.loads(json_text({"summary": s}))["summary"]["margin_amplitude_um"] == pytest.approx(183.3)
 
@@ -96,7 +96,7 @@ def test_sweep_with_margins_prints_the_amplitude_the_margins_divide_and_the_limi
     assert main(["sweep", str(COUNTERWEIGHT), "--speeds", "700,750", "--workers", "0", "--out", str(out),
                  "--margins", "--no-cache"]) == 0
     said = capsys.readouterr().out
-    assert "margins divide 183.3 µm: sticks up to 183.3 µm (not at 200.0 µm), searched at 750 rpm" in said
+    assert "margins divide 183.3 µm: sticks up to 183.3 µm, not at 200.0 µm (searched at 750 rpm)" in said
     assert "amplitude limit 200" not in said
     assert f"{out / 'limit_runs' / 'limit.png'}" in said.splitlines()[-1]
     # the amplitude plot is calibrated as the margins were, the factor handed over, not read back
@@ -106,3 +106,5 @@ def test_sweep_with_margins_prints_the_amplitude_the_margins_divide_and_the_limi
     summary = json.loads(capsys.readouterr().out)
     assert summary["margin_amplitude_um"] == pytest.approx(183.3) and summary["margin_bound"] == "stuck"
     assert summary["limit_plot"] == str(out / "limit_runs" / "limit.png")
+    # the margins' summary in words, as printed without --json
+    assert summary["margins"].startswith("UNSAFE at 750 rpm") and "the margins judge CW1" in summary["margins"]

@@ -43,7 +43,8 @@ def test_only_failed_speeds_besides_safe_ones_are_not_called_safe_at_every_speed
     result = margins.margins_of(None, sweep, LimitResult(0.2, (0.19, 0.2), 0.01, range_mm=(0.05, 0.5)), None)
     assert margins.describe_margins(result) == ("NOT JUDGED at 900 rpm: the multibody run failed there (the "
                                                 "sweep's failures), so there is no wing amplitude to judge; "
-                                                "safe at the others")
+                                                "safe at the others; the margins judge CW1 ([coupling] "
+                                                "counterweight = 1)")
 
 
 def test_the_margins_plot_marks_a_failed_speed(result, tmp_path, monkeypatch):

@@ -347,7 +347,8 @@ def test_margins_below_one_are_unsafe_and_those_within_the_tolerance_at_the_limi
     assert [result.state(k) for k in range(4)] == ["safe", "at the limit", "unsafe", "unsafe"]
     assert describe_margins(result) == ("UNSAFE at 800, 900 rpm: the wing vibration exceeds 240.0 µm, the largest "
                                         "amplitude shown to stick (margin below 1); at the limit at 750 rpm (within "
-                                        "the limit's tolerance of its bracket)")
+                                        "the limit's tolerance of its bracket); safe at the others; the margins "
+                                        "judge CW1 ([coupling] counterweight = 1)")
 
 
 def test_a_run_that_ends_early_ends_its_progress_bar_full_with_the_reason(capsys):

@@ -99,7 +99,7 @@ def test_a_demo_page_opens_with_the_jobs_verdict_and_keeps_the_search_runs_subor
     verdict = "UNSAFE at 600 rpm: margin 0.60 < 1"
     assert verdict in text
     assert "At the operating point, 750 rpm with a wing amplitude of 100 µm: verdict STICK, margin 2.00 (safe)" in text
-    assert ("Amplitude limit 200.0 µm: stuck at 183.3 µm, not stuck at 200.0 µm (searched at 900 rpm, the sweep's "
+    assert ("Sticks up to 183.3 µm, not at 200.0 µm, the amplitude limit (searched at 900 rpm, the sweep's "
             "fastest speed") in text
     order = [text.index(s) for s in (verdict, "Operating run cw (operating/results.h5)", "The amplitude search's runs")]
     assert order == sorted(order)
@@ -124,7 +124,7 @@ def test_a_sweep_page_states_the_limit_its_bracket_and_speed_read_off_the_search
     (job / "limit_runs" / "amplitude_0500.00um" / "results.h5.part").write_bytes(b"")
     text = _text(write_report(job))
     assert text.index("safe at every speed, smallest margin 1.16 at 900 rpm") < text.index("The amplitude search")
-    assert ("Amplitude limit 228.1 µm: stuck at 218.8 µm, not stuck at 228.1 µm (searched at 900 rpm, the sweep's "
+    assert ("Sticks up to 218.8 µm, not at 228.1 µm, the amplitude limit (searched at 900 rpm, the sweep's "
             "fastest speed, where the centrifugal load is largest, over 50.0 µm to 500.0 µm)") in text
     assert "350 not stuck (counted as loosening) stopped: runaway wear" in text
     assert "500 none did not finish" in text
@@ -160,7 +160,7 @@ def test_a_sweep_page_reads_the_bracket_and_what_the_margins_divide_from_its_lim
     text = _sweep_job(tmp_path, [0.1, 0.17, 0.19], {
         "limit_um": 200.0, "limit_mm": 0.2, "bracket_um": [183.3, 200.0], "margin_amplitude_um": 183.3,
         "margin_bound": "stuck"}, 0.1833, "stuck")
-    assert ("Amplitude limit 200.0 µm: stuck at 183.3 µm, not stuck at 200.0 µm (searched at 900 rpm, the sweep's "
+    assert ("Sticks up to 183.3 µm, not at 200.0 µm, the amplitude limit (searched at 900 rpm, the sweep's "
             "fastest speed, where the centrifugal load is largest, over 100.0 µm to 400.0 µm, tolerance 25.0 µm)"
             ) in text
     # 170 µm lies within the tolerance of the bracket's lower end; 190 µm inside the bracket
@@ -262,7 +262,7 @@ def test_a_limit_page_leads_with_the_limit_and_shows_the_scene_once_with_a_cavea
         "range_um": [100.0, 175.0], "monotone": True, "changes": [], "runs": []}))
     page = write_report(job).read_text()
     text = _text(job / "report.html")
-    limit = "Amplitude limit 175.0 µm: stuck at 150.0 µm, not stuck at 175.0 µm (searched at 750 rpm"
+    limit = "Sticks up to 150.0 µm, not at 175.0 µm, the amplitude limit (searched at 750 rpm"
     assert limit in text and text.index(limit) < text.index("The amplitude search's runs")
     assert "sweep's fastest speed" not in text and "margin" not in text
     assert page.count("<pre>") == 1 and "not the amplitudes run above" in text

@@ -255,7 +255,7 @@ def test_the_stick_limit_line_says_at_which_speed_the_limit_was_searched(tmp_pat
     texts = _legend_texts(monkeypatch)
     result = _margins(_sweep_result())
     plot_margins(result, tmp_path / "margins.png", "cw: fretting safety margin")
-    assert "sticks up to 190.0 µm (not at 200.0 µm), searched at 750 rpm" in texts
+    assert "sticks up to 190.0 µm, not at 200.0 µm (searched at 750 rpm)" in texts
 
 
 def test_a_limit_above_the_range_is_drawn_at_its_top_saying_so(tmp_path, monkeypatch):
