@@ -123,6 +123,17 @@ def _damage_maximum(name: str, value: float, units: str, location) -> str:
     return text
 
 
+def _not_settled(s: dict) -> str | None:
+    """A line when a run that did not loosen ended before its contact became stationary: what to
+    raise to see where it settles (QA: the user joint with steel's rates ended 'damage (not yet
+    stationary)' after 90 real cycles, its COF phase cut short, and nothing said what to do)."""
+    if s.get("stationary", True) or s["verdict"] == "loosening":
+        return None
+    return ("  NOTE: the contact was still changing when the run ended (not yet stationary): the verdict covers "
+            "the running time run; raise procedure.cof_cycles (the COF phase) or wear_cycles / life_cycles "
+            "(the wear phase) to see where it settles")
+
+
 def _human_summary(outcome) -> str:
     s = outcome.summary
     lines = [f"scene {s['scene']}: verdict {s['verdict'].upper()}"
@@ -151,7 +162,8 @@ def _human_summary(outcome) -> str:
         lines.append(f"  the run stands for {s['equivalent_cycles']:.3g} real load cycles, "
                      f"{s['equivalent_engine_hours']:.3g} engine hours at {s['engine_speed_rpm']:.0f} rpm"
                      + (f"; {', '.join(when)}" if when else ""))
-    for note in (_short_of_life(s), _clamp_still_falling(s)):
+    short = _short_of_life(s)
+    for note in (short, _clamp_still_falling(s), None if short else _not_settled(s)):
         if note:
             lines.append(note)
     if s.get("min_stick_margin") is not None:
