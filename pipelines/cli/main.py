@@ -507,13 +507,13 @@ def _add_validate_and_demo_parsers(sub) -> None:
     validate = sub.add_parser("validate", help="validation against closed forms and reference models")
     validate.add_argument("--json", action="store_true")
     validate.add_argument("--quick", action="store_true", help="coarser settings (CI)")
-    validate.add_argument("--out", default="results/validation")
+    validate.add_argument("--out", default="results/validation", help="output folder (default: %(default)s)")
     validate.set_defaults(func=cmd_validate)
     demo = sub.add_parser("demo", help="run the main job on the built-in default scene",
                           description="The crankshaft-counterweight pipeline end to end on examples/counterweight.toml "
                                       "at a demo resolution: multibody run, contact model, COF and wear phases, "
                                       "amplitude limit, speed sweep to safety margins.")
-    demo.add_argument("--out", default="results/demo")
+    demo.add_argument("--out", default="results/demo", help="output folder (default: %(default)s)")
     demo.add_argument("--json", action="store_true")
     demo.add_argument("--quiet", action="store_true", help="no progress bars")
     demo.add_argument("--workers", type=int, default=None, help="worker processes for the limit and sweep cases")
@@ -537,7 +537,7 @@ def _add_scan_arguments(parser, out: str) -> None:
                                                                       "µm (default 10)")
     parser.add_argument("--grid", type=int, default=7,
                         help="amplitudes of the first scan (default 7); their spacing is the scan's resolution")
-    parser.add_argument("--out", default=out)
+    parser.add_argument("--out", default=out, help="output folder (default: %(default)s)")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--quiet", action="store_true")
     _add_cache_arguments(parser)
@@ -554,7 +554,7 @@ def _add_reduce_parser(sub) -> None:
     reduce.add_argument("--density", type=float, default=7.85e-9, help="t/mm³")
     reduce.add_argument("--interface-sets", nargs="*", help="node sets coupled as interfaces (default: all)")
     reduce.add_argument("--clamp-sets", nargs="*", help="node sets held fixed")
-    reduce.add_argument("--out", default="results/reduce")
+    reduce.add_argument("--out", default="results/reduce", help="output folder (default: %(default)s)")
     reduce.add_argument("--json", action="store_true")
     reduce.set_defaults(func=cmd_reduce)
 
