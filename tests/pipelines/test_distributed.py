@@ -206,4 +206,4 @@ def test_a_case_the_cluster_gave_up_on_without_an_exception_is_said_in_words():
         return [CaseOutcome(key, None, said, 1) for key, _ in cases]
 
     with pytest.raises(ConvergenceError, match="the run at 100.0 µm failed \\(it did not finish on the cluster"):
-        limit._search("scene.toml", 0.1, 0.4, 0.05, 3, None, None, None, {}, 1, False, lost)
+        limit._search("scene.toml", 0.1, 0.4, 0.05, 3, None, None, None, {}, False, lost)
