@@ -55,6 +55,14 @@ def _fractions(area, nominal, mask):
     return float(area[mask].sum() / nominal) if nominal > 0 else 0.0
 
 
+#: A point's COF has evolved once it has risen by more than this share of its range μ_max − μ0
+#: (numerical micro-slips of equilibrium iterations raise μ by round-off amounts that are not fretting).
+COF_EVOLVED_SHARE = 0.01
+#: The clamp force's loss rate holds up (loosening, :func:`loosening_evident`) while the second half
+#: of the window loses at least this share of the first half's rate per real cycle.
+RATE_HOLDS = 0.8
+
+
 def cycle_figures(area: np.ndarray, nominal_area: float, status: np.ndarray,
                   max_utilised: np.ndarray, state: ContactState, cof_initial: np.ndarray,
                   cof_max, area_tolerance: float, master_wear: np.ndarray | None = None,
@@ -77,9 +85,7 @@ def cycle_figures(area: np.ndarray, nominal_area: float, status: np.ndarray,
         "slip_area_fraction": _fractions(area, nominal_area, slipped),
         "damaged_area_fraction": _fractions(area, nominal_area, damaged),
         "worn_area_fraction": _fractions(area, nominal_area, np.asarray(wear) > 1e-9),
-        # evolved: risen by more than 1 % of its range (numerical micro-slips of equilibrium
-        # iterations raise μ by round-off amounts that are not fretting)
-        "cof_evolved_area_fraction": _fractions(area, nominal_area, state.cof > cof_initial + 0.01 * (
+        "cof_evolved_area_fraction": _fractions(area, nominal_area, state.cof > cof_initial + COF_EVOLVED_SHARE * (
             np.broadcast_to(cof_max, area.shape) - cof_initial)),
         **wear_figures(area, state, master_wear, master_area),
         "dissipated_energy_mJ": float(np.sum(state.dissipation * area)),
@@ -225,11 +231,17 @@ def loosening_evident(history: list, procedure) -> bool:
         return False
     recent, force, real, first_rate, second_rate = window
     stick = np.array([c.figures["stick_area_fraction"] for c in recent])
-    falling = second_rate > 0.0 and second_rate >= 0.8 * first_rate
+    falling = second_rate > 0.0 and second_rate >= RATE_HOLDS * first_rate
     visible = force[0] - force[-1] > 5e-3 * abs(force[0])
     stick_change = np.polyfit(real - real[0], stick, 1)[0] * (real[-1] - real[0])
     stick_shrinks = stick_change < -procedure.area_tolerance or stick[-1] <= procedure.area_tolerance
     return bool(falling and visible and stick_shrinks)
+
+
+def clamp_loss_pace(rate_ratio: float | None) -> str:
+    """How the clamp force was falling, in words, from ``clamp_loss_rate_ratio`` (the window's
+    second half's loss rate over its first's): slowing below :data:`RATE_HOLDS`."""
+    return "at a slowing rate" if rate_ratio is not None and rate_ratio < RATE_HOLDS else "at an undiminished rate"
 
 
 def clamp_still_falling(history: list, procedure, initial_clamp: float | None) -> dict:

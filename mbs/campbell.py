@@ -32,8 +32,8 @@ class Campbell:
     orders (n_o,) engine orders drawn as lines f = order * rpm / 60; crossings: list of dicts
     with keys order, mode, speed_rpm, frequency_hz where an order line meets a CW mode line.
     system_frequencies (n_s, k) Hz: eigenfrequencies of the coupled multibody model (crank throw
-    + both CWs) or None; system_crossings: the order crossings of those modes, where a run
-    resonates."""
+    + both CWs) or None; system_crossings: the order crossings of those modes, where a run may
+    resonate (a resonance only where the swept amplitude peaks)."""
 
     speeds_rpm: np.ndarray
     frequencies: np.ndarray

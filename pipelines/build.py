@@ -91,9 +91,9 @@ def make_mesh(spec: dict, where: str, base: Path | None):
         given = ", ".join(f"{key} = {value!r}" for key, value in args.items())
         try:
             return getattr(meshes, generator)(**args), None
-        except TypeError as error:  # an optional key of the wrong type (growth = "fine")
-            raise InputError(f"'{where}' (mesh generator {generator}: {given}): {error}") from None
-        except InputError as error:  # the generator's own geometry rules (scene.checks says the 2D blocks')
+        # an optional key of the wrong type (growth = "fine"), or the generator's own geometry
+        # rules (scene.checks says the 2D blocks')
+        except (TypeError, InputError) as error:
             raise InputError(f"'{where}' (mesh generator {generator}: {given}): {error}") from None
     path = Path(spec["file"])
     if base is not None and not path.is_absolute():

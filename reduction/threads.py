@@ -104,6 +104,7 @@ def pinned_while_inside():
     Jobs run concurrently on several threads of one process must pin it instead
     (:func:`pin_process`, as each dask worker does): MKL's thread count is the calling
     thread's (measured: a limit set on one thread left MKL at two threads on another)."""
+    global _pinned
     with _lent:
         if _lending[0] == 0:
             if _pinned is not None and _pinned[1] == 1:
@@ -111,7 +112,7 @@ def pinned_while_inside():
             else:
                 _load_blas_libraries()
                 _lending[1:] = [blas_controller().limit(limits=1, user_api="blas"), _pinned]
-                _set_pinned((len(sys.modules), 1))
+                _pinned = (len(sys.modules), 1)
         _lending[0] += 1
     try:
         yield
@@ -120,13 +121,8 @@ def pinned_while_inside():
             _lending[0] -= 1
             if _lending[0] == 0 and _lending[1] is not None:
                 _lending[1].restore_original_limits()
-                _set_pinned(_lending[2])
+                _pinned = _lending[2]
                 _lending[1:] = [None, None]
-
-
-def _set_pinned(value) -> None:
-    global _pinned
-    _pinned = value
 
 
 def one_blas_thread(function):

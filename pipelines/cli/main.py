@@ -99,8 +99,9 @@ def _clamp_still_falling(s: dict) -> str | None:
     lost = s.get("clamp_loss_recent_fraction")
     if lost is None:
         return None
-    ratio = s.get("clamp_loss_rate_ratio")
-    pace = ("at a slowing rate" if ratio is not None and ratio < 0.8 else "at an undiminished rate")
+    from contact.verdict import clamp_loss_pace
+
+    pace = clamp_loss_pace(s.get("clamp_loss_rate_ratio"))
     return (f"  NOTE: the clamp force was still falling at the end: {lost:.2%} of it lost over the last "
             f"{s['clamp_loss_recent_cycles']:.3g} real cycles, {pace}; the joint has not settled, and whether it "
             "levels off or loosens needs a longer run (raise wear_cycles or life_cycles)")

@@ -118,21 +118,6 @@ def sweep_calibration(result: SweepResult, scene_path, speed_rpm: float) -> tupl
                                  f"{1e3 * raw:.3g} µm at {speed_rpm:g} rpm")
 
 
-def _margins_calibration(path) -> tuple[float | None, str]:
-    """The calibration factor `sweep --margins` recorded in the sweep file (/margins), if any."""
-    import h5py
-
-    try:
-        with h5py.File(path, "r") as handle:
-            if "margins" in handle:
-                factor = float(handle["margins"].attrs["calibration_factor"])
-                return factor, ("calibration = the scene's stated wing amplitude / its CW's multibody amplitude at "
-                                "the scene's speed (as the margins use it)")
-    except OSError:
-        pass
-    return None, ""
-
-
 def add_sweep_parser(subparsers):
     """Add the `sweep` sub-command to an argparse subparsers object; returns the parser."""
     parser = subparsers.add_parser(
@@ -195,15 +180,14 @@ def sweep_warnings(params: ModelParams, speeds, written: str) -> list[str]:
             + check_resolution(params, speeds))
 
 
-def sweep_summary(result: SweepResult, path, plots, calibration: tuple[float | None, str] | None = None) -> dict:
+def sweep_summary(result: SweepResult, path, plots, calibration: tuple[float | None, str]) -> dict:
     """Draw the sweep's plots into the folder ``plots`` (wing amplitude over speed with the
     crossings, Campbell diagram) and return its summary: the figures of ``--json``
     (:meth:`SweepResult.to_json`), the file ``path`` and the plots. `sweep` and `sweep --margins`
     both report a sweep with it. calibration: (factor or None, where it comes from) for the
-    amplitude plot (:func:`sweep_calibration`); when not given, the factor `sweep --margins` wrote
-    into the sweep file, if it did."""
+    amplitude plot (:func:`sweep_calibration`)."""
     plots = Path(plots)
-    factor, note = calibration if calibration is not None else _margins_calibration(path)
+    factor, note = calibration
     crossing_speeds = [c["speed_rpm"] for c in result.crossings]
     drawn = {"wing_amplitude": plot_sweep(result.speeds_rpm, result.wing_amplitude, plots / "sweep_wing_amplitude.png",
                                           crossings_rpm=crossing_speeds, calibration=factor, calibration_note=note),

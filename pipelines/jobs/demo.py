@@ -124,7 +124,7 @@ def _summary(name: str, s: dict, limit, margins, times: dict) -> dict:
         "margin_basis": margin_basis(margins),
         "amplitude_limit_um": None if limit.limit_mm is None else 1e3 * limit.limit_mm,
         "margin_at_operating_point": float(point.margin[0]),
-        "operating_point": _operating_state(point),
+        "operating_point": point.shown_state(0),
         **{k: v for k, v in margins.to_json().items()
            if k in ("bracket_um", "margin_bound", "smallest_margin", "smallest_margin_speed_rpm",
                     "unsafe_speeds", "at_limit_speeds", "warnings", "counterweight", "crossings_between_speeds_rpm",
@@ -144,13 +144,6 @@ def _operating_point(s: dict, limit, margins):
         margin = limit.margin_limit_mm / amplitude
     return MarginResult(np.array([s["engine_speed_rpm"]], dtype=float), amplitude, margins.calibration, limit,
                         margin, margins.limit_speed_rpm)
-
-
-def _operating_state(point) -> str:
-    """'unsafe', 'at the limit', 'safe', or 'not shown safe' when nothing of the searched range
-    stuck (the margin is then an upper bound: no amplitude was shown to stick)."""
-    state = point.state(0)
-    return "not shown safe" if state == "at the limit" and point.limit.margin_bound == "upper bound" else state
 
 
 def describe(result: DemoResult) -> str:

@@ -108,6 +108,12 @@ class MarginResult:
             return "not judged"
         return "unsafe" if self.unsafe[k] else "at the limit" if self.at_limit[k] else "safe"
 
+    def shown_state(self, k: int) -> str:
+        """:meth:`state` as it is said: 'not shown safe' for 'at the limit' when nothing of the
+        searched range stuck (the margins are then upper bounds: no amplitude was shown to stick)."""
+        state = self.state(k)
+        return "not shown safe" if state == "at the limit" and self.limit.margin_bound == "upper bound" else state
+
     def to_json(self) -> dict:
         return {
             "unsafe_speeds": self.speeds_rpm[self.unsafe].tolist(),

@@ -40,6 +40,7 @@ from matplotlib.ticker import MaxNLocator, ScalarFormatter  # noqa: E402
 
 from contact.damage import fretting_damage  # noqa: E402
 from contact.solver import NewtonSettings  # noqa: E402
+from contact.verdict import COF_EVOLVED_SHARE  # noqa: E402
 
 PATH_POINTS = 400
 
@@ -69,7 +70,6 @@ QUANTITIES = {
     "fdp": Quantity(r"fretting damage FDP $\tau\cdot\delta$", "MPa·mm"),
     "ffdp": Quantity(r"fretting fatigue FFDP $\sigma_t\cdot\tau\cdot\delta$", "MPa²·mm"),
 }
-FIELD_LABELS = {name: quantity.label for name, quantity in QUANTITIES.items()}
 
 #: fields that mean nothing where a point is open over the whole cycle (status 0): drawn grey
 MEANINGLESS_WHEN_OPEN = ("max_utilised_cof", "slip_range")
@@ -362,7 +362,7 @@ def _cof_note(field: Field, law: tuple[float, float] | None) -> str | None:
     μ0 + 1 % of μ_max − μ0)."""
     if field.name != "cof" or law is None or law[1] <= law[0] or field.is_uniform:
         return None
-    threshold = law[0] + 0.01 * (law[1] - law[0])
+    threshold = law[0] + COF_EVOLVED_SHARE * (law[1] - law[0])
     if field.values.max() > threshold:
         return None
     return f"nowhere evolved: max {field.values.max():.4g} below μ0 + 1 % of (μ_max − μ0) = {threshold:.4g}"
@@ -380,7 +380,8 @@ def _map(mesh, field: Field, a, b, title, target, stop: str | None = None, *,
     masked = None if open_points is None else open_points[mesh.triangles].all(axis=1)
     if masked is not None and not masked.any():  # open points only at the edges of closed facets
         open_points = None
-    flat = field.is_uniform or high - low <= SAME_VALUE * max(abs(low), abs(high))
+    narrow = high - low <= SAME_VALUE * max(abs(low), abs(high))  # a scale too narrow to colour
+    flat = field.is_uniform or narrow
     units = "" if field.quantity.units == "-" else f" {field.quantity.units}"
     note = field.note() or (f"uniform: {high:.6g}{units} wherever closed" if flat else _cof_note(field, law))
     grey = None if open_points is None else "grey: open over the whole cycle (no contact, nothing to draw)"
@@ -393,7 +394,7 @@ def _map(mesh, field: Field, a, b, title, target, stop: str | None = None, *,
                      vmax=1.0, edgecolors="none")
     if flat:
         # one colour: on the law's scale for a COF (μ0 at its foot), else in the middle of ±1
-        on_scale = high - low > SAME_VALUE * max(abs(low), abs(high))
+        on_scale = not narrow
         value = float(np.mean(field.shown)) if on_scale else high
         mappable = ax.tripcolor(triangles, np.full(len(field.values), value), cmap="viridis",
                                 vmin=low if on_scale else value - 1.0, vmax=high if on_scale else value + 1.0,

@@ -28,7 +28,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from contact.verdict import VERDICT_MEANINGS
+from contact.verdict import VERDICT_MEANINGS, clamp_loss_pace
 from pipelines.output.locks import REPORT_TITLE
 from reduction.errors import InputError
 
@@ -41,7 +41,6 @@ PACKAGES = ("fretwork", "numpy", "scipy", "scikit-fem", "exudyn", "h5py", "matpl
 #: the folder a limit search writes each amplitude's run into (pipelines.jobs.limit.run_amplitude)
 AMPLITUDE_FOLDER = re.compile(r"amplitude_[0-9.]+um")
 #: the endings of a run that stopped and still answer the search: not stuck (pipelines.jobs.limit.STOPPED)
-STOPPED_NOT_STUCK = ("slid_off", "wear_runaway", "separated")
 #: Area fractions are sums of point areas over the nominal area: a whole area can sum to 1 + 2e-16.
 ROUNDING = 1e-9
 AREAS_NOTE = ("Areas are fractions of the contact area closed after the preload. Above 100 %: points beyond "
@@ -277,8 +276,7 @@ def _operating_rows(s: dict) -> list:
         rows.append(("NOTE", f"the run ended at its wear_cycles budget, {_percent(s['equivalent_cycles'] / life)} of "
                              f"its life ({_cycles(life)} cycles): the verdict covers that running time only"))
     if s.get("clamp_loss_recent_fraction") is not None:
-        ratio = s.get("clamp_loss_rate_ratio")
-        pace = "at a slowing rate" if ratio is not None and ratio < 0.8 else "at an undiminished rate"
+        pace = clamp_loss_pace(s.get("clamp_loss_rate_ratio"))
         rows.append(("NOTE", f"the clamp force was still falling at the end: {_percent(s['clamp_loss_recent_fraction'])} "
                              f"of it lost over the last {_cycles(s['clamp_loss_recent_cycles'])} real cycles, {pace}; "
                              "the joint has not settled, and a longer run tells whether it levels off or loosens"))
@@ -448,12 +446,15 @@ def _limit_sentence(facts: dict, speed_rpm: float | None, why_speed: str = "") -
 
 def _search_section(search: Search, root: Path, with_scene: bool) -> str:
     """The search's runs as supporting material: one compact row each."""
+    from pipelines.jobs.limit import STOPPED
+
+    not_stuck = {ending.value for ending in STOPPED}  # the endings a search counts as loosening
     rows = []
     for run in sorted(search.runs, key=lambda r: (r.amplitude_mm is None, r.amplitude_mm or 0.0)):
         amplitude = _number(1e3 * run.amplitude_mm, 4) if run.amplitude_mm is not None else "–"
         where = _relative(run.folder, root)
         if run.summary is None:
-            rows.append([amplitude, "not stuck (counted as loosening)" if run.ending in STOPPED_NOT_STUCK else "none",
+            rows.append([amplitude, "not stuck (counted as loosening)" if run.ending in not_stuck else "none",
                          html.escape(_stopped(run.ending)), *["–"] * 6, where])
             continue
         s = run.summary
@@ -561,10 +562,7 @@ def _states(m: Margins, facts: dict) -> list:
 
     judged = MarginResult(m.speeds_rpm, m.wing_amplitude_mm, m.calibration, _limit_result(facts), m.margin,
                           m.limit_speed_rpm)
-    states = [judged.state(k) for k in range(len(m.speeds_rpm))]
-    if facts["margin_bound"] == "upper bound":
-        return ["not shown safe" if state == "at the limit" else state for state in states]
-    return states
+    return [judged.shown_state(k) for k in range(len(m.speeds_rpm))]
 
 
 def _divided(facts: dict, m: Margins) -> str:
