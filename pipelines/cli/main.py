@@ -303,14 +303,14 @@ def _margins_calibration(scene, speed_rpm: float, result) -> tuple[float | None,
     """The factor the margins multiplied the sweep's multibody amplitudes by and where it comes
     from, for :func:`pipelines.cli.mbs.sweep_summary`; None when the scene states no wing
     amplitude: its multibody amplitudes are then its own (:func:`pipelines.jobs.margins.calibration_factor`)."""
-    from pipelines.coupling import CouplingSettings
+    from pipelines.cli.mbs import UNCALIBRATED
     from pipelines.jobs.limit import format_um
 
     stated = scene.data["coupling"].get("wing_amplitude")
     if stated is None:
-        return None, "a scene that states no wing amplitude uses these amplitudes as they are"
+        return None, UNCALIBRATED
     return result.calibration, (f"calibration = the scene's stated {format_um(stated)} µm / "
-                                f"CW{CouplingSettings.of(scene).counterweight}'s multibody amplitude at the scene's "
+                                f"CW{result.counterweight}'s multibody amplitude at the scene's "
                                 f"{speed_rpm:g} rpm (as the margins use it)")
 
 

@@ -100,6 +100,10 @@ def scene_calibration(path) -> tuple[str, float | None, int]:
             counterweight if isinstance(counterweight, int) else 1)
 
 
+#: What a scene that states no wing amplitude does with the multibody amplitudes (a calibration note)
+UNCALIBRATED = "a scene that states no wing amplitude uses these amplitudes as they are"
+
+
 def sweep_calibration(result: SweepResult, scene_path, speed_rpm: float) -> tuple[float | None, str]:
     """The factor the scene's coupling multiplies the sweep's multibody amplitudes by, and a note
     saying where it comes from: its stated wing amplitude over the sweep's amplitude of its CW
@@ -107,7 +111,7 @@ def sweep_calibration(result: SweepResult, scene_path, speed_rpm: float) -> tupl
     calibrates (no stated amplitude: the multibody amplitudes are the scene's own)."""
     _, stated, counterweight = scene_calibration(scene_path)
     if stated is None:
-        return None, "a scene that states no wing amplitude uses these amplitudes as they are"
+        return None, UNCALIBRATED
     at = np.flatnonzero(np.isclose(result.speeds_rpm, speed_rpm))
     raw = result.wing_amplitude[at[0], counterweight - 1] if at.size and counterweight <= result.wing_amplitude.shape[1] \
         else np.nan
