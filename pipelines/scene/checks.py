@@ -327,7 +327,7 @@ def _bolt_axis_problems(name, bolt, axis, head, nut, dim) -> list[str]:
     """The bolt's axis against the direction from its head's reference-point position to its
     nut's, when both are known (a bolt whose axis points the other way pulls its ends apart, and
     a tilted one shears the joint instead of clamping it)."""
-    if not all(isinstance(p, list) and len(p) == dim and all(_number(c) for c in p) for p in (head, nut)):
+    if not all(isinstance(p, list) and len(p) == dim and all(finite(c) for c in p) for p in (head, nut)):
         return []
     span = [b - a for a, b in zip(head, nut)]
     length = math.hypot(*span)
@@ -468,16 +468,20 @@ def _check_support(data, problems):
 
 def _check_procedure(data, problems):
     procedure = data.get("procedure", {})
-    cof_cycles, wear_cycles = (procedure.get(key, getattr(Procedure, key)) for key in ("cof_cycles", "wear_cycles"))
+    cof_cycles, wear_cycles = _cycles(procedure)
     if all(isinstance(n, int) and n == 0 for n in (cof_cycles, wear_cycles)):
         problems.append("'procedure.cof_cycles' and 'procedure.wear_cycles' are both 0 (or not given): the "
                         "run would end after the preload with no load cycle to judge; set cof_cycles (COF "
                         "stabilisation cycles) or wear_cycles (wear cycles) to at least 1")
-
-    run_up, cof_cycles = procedure.get("vibration_run_up", 0), procedure.get("cof_cycles", 0)
+    run_up = procedure.get("vibration_run_up", 0)
     if isinstance(run_up, int) and isinstance(cof_cycles, int) and run_up > cof_cycles:
         problems.append(f"'procedure.vibration_run_up' ({run_up}) must not exceed 'procedure.cof_cycles' "
                         f"({cof_cycles}): the vibration runs up within the COF phase")
+
+
+def _cycles(procedure: dict) -> tuple:
+    """The [procedure] table's cof_cycles and wear_cycles, the Procedure's defaults where not given."""
+    return tuple(procedure.get(key, getattr(Procedure, key)) for key in ("cof_cycles", "wear_cycles"))
 
 
 def idle_procedure(data) -> str | None:
@@ -486,8 +490,7 @@ def idle_procedure(data) -> str | None:
     None when it runs one. Not part of :func:`pipelines.scene.schema.validate`: a model that is
     only built (the validation job's patch tests set 'scene.effects' = [] on a wear scene) is
     sound; :func:`pipelines.scene.load` asks it of every scene whose effects it did not set."""
-    procedure = data.get("procedure", {})
-    cof_cycles, wear_cycles = (procedure.get(key, getattr(Procedure, key)) for key in ("cof_cycles", "wear_cycles"))
+    cof_cycles, wear_cycles = _cycles(data.get("procedure", {}))
     effects = _effects(data)
     if cof_cycles != 0 or not (isinstance(wear_cycles, int) and wear_cycles > 0) or effects is None or "wear" in effects:
         return None
@@ -526,11 +529,6 @@ _METAL_DENSITY = 1.5e-9  # t/mm³: lighter than any structural metal (magnesium 
 _METAL_NAMES = ("steel", "iron", "alumin", "titan", "copper", "brass", "bronze", "metal", "nickel")
 #: materials named so may be softer than 1 GPa (E of rubber ~5 MPa, PTFE ~500 MPa): no unit warning
 _SOFT_NAMES = ("rubber", "elastomer", "polymer", "plastic", "gasket", "ptfe", "nylon", "epoxy", "foam", "silicone")
-
-
-def _number(value) -> bool:
-    """A number to judge: finite (the schema refuses the others, and they have no unit)."""
-    return finite(value)
 
 
 #: Engine speeds (rpm) outside this band are most likely written in another unit. The slowest
@@ -582,9 +580,9 @@ def engine_speed_warnings(speeds, named: str, reference_rpm: float | None = None
     :data:`FASTEST_ENGINE_RPM`. With ``reference_rpm``, the engine speed of the same scene
     (``reference_named``: its key), speeds that all lie further than :data:`OTHER_UNIT_RATIO` below
     or above it are said instead, in one warning naming both speeds and the likely unit."""
-    speeds = [float(v) for v in speeds if _number(v) and math.isfinite(v) and v > 0]
+    speeds = [float(v) for v in speeds if finite(v) and v > 0]
     relative = _other_unit_than_reference(speeds, named, float(reference_rpm), reference_named) \
-        if _number(reference_rpm) and math.isfinite(reference_rpm) and reference_rpm > 0 and speeds else None
+        if finite(reference_rpm) and reference_rpm > 0 and speeds else None
     side, found = (None, []) if relative is None else (relative[0], [relative[1]])
     slow = [v for v in speeds if v < SLOWEST_ENGINE_RPM]
     fast = [v for v in speeds if v > FASTEST_ENGINE_RPM]
@@ -646,20 +644,20 @@ def _material_warnings(name, material) -> list[str]:
     found = []
     where = f"materials.{name}"
     modulus, density = material.get("youngs_modulus"), material.get("density")
-    metal = (_number(density) and density >= _METAL_DENSITY) or any(m in name.lower() for m in _METAL_NAMES)
+    metal = (finite(density) and density >= _METAL_DENSITY) or any(m in name.lower() for m in _METAL_NAMES)
     soft = any(m in name.lower() for m in _SOFT_NAMES)
-    if _number(modulus) and 0 < modulus < 1000.0 and metal:
+    if finite(modulus) and 0 < modulus < 1000.0 and metal:
         found.append(f"'{where}.youngs_modulus' = {modulus:g} MPa is below 1,000 MPa for a metal: probably GPa "
                      f"(MPa expected: {modulus:g} GPa is {1e3 * modulus:g} MPa)")
-    elif _number(modulus) and 0 < modulus < 1000.0 and not soft:
+    elif finite(modulus) and 0 < modulus < 1000.0 and not soft:
         found.append(f"'{where}.youngs_modulus' = {modulus:g} MPa is below 1,000 MPa, softer than any metal or "
                      f"engineering solid of a bolted joint: looks like GPa (MPa expected: {modulus:g} GPa is "
                      f"{1e3 * modulus:g} MPa)")
-    elif _number(modulus) and modulus > 1e7:
+    elif finite(modulus) and modulus > 1e7:
         found.append(f"'{where}.youngs_modulus' = {modulus:g} MPa is above any solid's: probably Pa "
                      f"(MPa expected: {modulus:g} Pa is {1e-6 * modulus:g} MPa)")
     for low, unit, scale in ((100.0, "kg/m³", 1e-12), (1e-3, "g/cm³", 1e-9), (1e-7, "kg/mm³", 1e-3)):
-        if _number(density) and density > low:
+        if finite(density) and density > low:
             found.append(f"'{where}.density' = {density:g} t/mm³ is far heavier than any solid: probably {unit} "
                          f"(t/mm³ expected: {density:g} {unit} is {scale * density:g} t/mm³)")
             break
@@ -678,7 +676,7 @@ NORMAL_STIFFNESS_BAND = (1e2, 1e10)
 
 def _normal_stiffness_warnings(stiffness) -> list[str]:
     low, high = NORMAL_STIFFNESS_BAND
-    if not _number(stiffness) or low <= stiffness <= high or stiffness <= 0:
+    if not finite(stiffness) or low <= stiffness <= high or stiffness <= 0:
         return []
     said = f"'contact.normal_stiffness' = {stiffness:g} N/mm³ is "
     if stiffness < low:
@@ -721,7 +719,7 @@ def _inactive_effect_warnings(data: dict) -> list[str]:
         set_keys = [(table, key) for table, key in keys if key in tables[table]
                     and tables[table][key] != _EFFECT_KEY_DEFAULTS.get(key, getattr(Procedure, key, None))]
         contact = tables["contact"]
-        if (effect == "cof_evolution" and _number(contact.get("cof_max")) and _number(contact.get("cof_initial"))
+        if (effect == "cof_evolution" and finite(contact.get("cof_max")) and finite(contact.get("cof_initial"))
                 and contact["cof_max"] > contact["cof_initial"]):
             set_keys.insert(0, ("contact", "cof_max"))
         if not set_keys:
@@ -750,20 +748,20 @@ def plausibility(data: dict) -> list[str]:
         if isinstance(material, dict):
             found += _material_warnings(str(name), material)
     amplitude = table("coupling").get("wing_amplitude")
-    if _number(amplitude) and amplitude > 10.0:
+    if finite(amplitude) and amplitude > 10.0:
         found.append(f"'coupling.wing_amplitude' = {amplitude:g} mm is larger than 10 mm: probably µm "
                      f"(mm expected: {amplitude:g} µm is {1e-3 * amplitude:g} mm)")
-    elif _number(amplitude) and 0 < amplitude < 1e-3:
+    elif finite(amplitude) and 0 < amplitude < 1e-3:
         found.append(f"'coupling.wing_amplitude' = {amplitude:g} mm is below 1 µm: probably m "
                      f"(mm expected: {amplitude:g} m is {1e3 * amplitude:g} mm)")
     speed = table("mbs").get("speed_rpm")
-    if _number(speed):
+    if finite(speed):
         found += engine_speed_warnings([speed], "[mbs] speed_rpm")
     slip = table("contact").get("critical_slip")
-    if _number(slip) and slip > 1.0:
+    if finite(slip) and slip > 1.0:
         found.append(f"'contact.critical_slip' = {slip:g} mm is larger than 1 mm: probably µm "
                      f"(mm expected: {slip:g} µm is {1e-3 * slip:g} mm)")
-    elif _number(slip) and slip > LARGEST_CRITICAL_SLIP_MM:
+    elif finite(slip) and slip > LARGEST_CRITICAL_SLIP_MM:
         found.append(f"'contact.critical_slip' = {slip:g} mm is above {LARGEST_CRITICAL_SLIP_MM:g} mm, where γ_crit, "
                      f"a micro-slip, is typically 0.5 to 10 µm: probably µm (mm expected: {slip:g} µm is "
                      f"{1e-3 * slip:g} mm)")
@@ -772,10 +770,10 @@ def plausibility(data: dict) -> list[str]:
     for name, bolt in table("bolts").items():
         pretension = bolt.get("pretension") if isinstance(bolt, dict) else None
         stiffness = bolt.get("stiffness") if isinstance(bolt, dict) else None
-        if _number(pretension) and 0 < pretension < 100.0:
+        if finite(pretension) and 0 < pretension < 100.0:
             found.append(f"'bolts.{name}.pretension' = {pretension:g} N is below 100 N: probably kN "
                          f"(N expected: {pretension:g} kN is {1e3 * pretension:g} N)")
-        elif _number(pretension) and _number(stiffness) and pretension > 0 and stiffness > 0 \
+        elif finite(pretension) and finite(stiffness) and pretension > 0 and stiffness > 0 \
                 and pretension / stiffness < BOLT_STRETCH_MM:
             # a preloaded bolt stretches by tens to hundreds of µm (the shipped joints 25-775 µm;
             # an M3 screw at 2 kN on 1e5 N/mm, 20 µm): 400 N on 8e5 N/mm is 400 kN typed in kN
@@ -786,13 +784,13 @@ def plausibility(data: dict) -> list[str]:
     loads = data.get("body_loads") if isinstance(data.get("body_loads"), list) else []
     for k, load in enumerate(entry for entry in loads if isinstance(entry, dict)):
         acceleration = load.get("acceleration")
-        if isinstance(acceleration, list) and acceleration and all(_number(a) for a in acceleration):
+        if isinstance(acceleration, list) and acceleration and all(finite(a) for a in acceleration):
             size = sum(a * a for a in acceleration) ** 0.5
             if 1.0 <= size <= 100.0:
                 found.append(f"'body_loads[{k}].acceleration' has magnitude {size:g} mm/s²: probably m/s² "
                              f"(mm/s² expected: {size:g} m/s² is {1e3 * size:g} mm/s²)")
         spin = load.get("angular_velocity")
-        if isinstance(spin, list) and spin and all(_number(w) for w in spin):
+        if isinstance(spin, list) and spin and all(finite(w) for w in spin):
             size = sum(w * w for w in spin) ** 0.5
             if size > 1000.0:
                 found.append(f"'body_loads[{k}].angular_velocity' has magnitude {size:g} rad/s: probably rpm "
@@ -840,10 +838,10 @@ def _distance_from_box(length, low, high) -> float | None:
     for anything else."""
     if isinstance(length, tuple):
         axis, value = length
-        if not (_number(value) and math.isfinite(value)) or axis >= len(low):
+        if not (finite(value) and math.isfinite(value)) or axis >= len(low):
             return None
         return max(low[axis] - value, 0.0, value - high[axis])
-    if not (isinstance(length, list) and len(length) == len(low) and all(_number(c) for c in length)):
+    if not (isinstance(length, list) and len(length) == len(low) and all(finite(c) for c in length)):
         return None
     distance = math.hypot(*(max(lo - c, 0.0, c - hi) for c, lo, hi in zip(length, low, high)))
     return distance if math.isfinite(distance) else None
@@ -860,11 +858,11 @@ def _body_loads(data: dict, body: str) -> list[tuple[str, float]]:
     found = []
     for k, load in enumerate(data.get("loads", []) if isinstance(data.get("loads"), list) else []):
         if (isinstance(load, dict) and str(load.get("dof", "")).split(".")[0] == body
-                and _number(load.get("value"))):
+                and finite(load.get("value"))):
             found.append((f"loads[{k}].value", abs(float(load["value"]))))
     bolts = data.get("bolts", {}) if isinstance(data.get("bolts"), dict) else {}
     for name, bolt in bolts.items():
-        if (isinstance(bolt, dict) and _number(bolt.get("pretension"))
+        if (isinstance(bolt, dict) and finite(bolt.get("pretension"))
                 and body in (str(bolt.get("head", "")).split(".")[0], str(bolt.get("nut", "")).split(".")[0])):
             found.append((f"bolts.{name}.pretension", abs(float(bolt["pretension"]))))
     return found
@@ -880,7 +878,7 @@ def _overloaded(data: dict, body: str, sizes: list[float]) -> str | None:
     loads = _body_loads(data, body)
     ordered = sorted(sizes, reverse=True)
     section = ordered[0] if len(sizes) == 2 else ordered[0] * ordered[1]
-    if not (loads and _number(young) and young > 0.0 and section > 0.0):
+    if not (loads and finite(young) and young > 0.0 and section > 0.0):
         return None
     key, force = max(loads, key=lambda entry: entry[1])
     stress = force / section
