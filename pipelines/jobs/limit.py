@@ -156,7 +156,7 @@ def check_search(low_mm: float, high_mm: float, tolerance_mm: float, grid: int =
         problems.append("the amplitude range needs 0 < low < high")
     if not math.isfinite(tolerance_mm) or tolerance_mm <= 0:
         problems.append("the limit tolerance must be a finite positive number")
-    elif math.isfinite(high_mm) and 0 < low_mm < high_mm and tolerance_mm >= (1 - 1e-9) * (high_mm - low_mm):  # µm → mm rounds
+    elif 0 < low_mm < high_mm and tolerance_mm >= (1 - 1e-9) * (high_mm - low_mm):  # µm → mm rounds
         width = high_mm - low_mm
         problems.append(f"the limit tolerance, {format_um(tolerance_mm)} µm, is not narrower than the amplitude "
                         f"range {format_um(low_mm, width)}:{format_um(high_mm, width)} µm "
