@@ -130,6 +130,8 @@ def _not_settled(s: dict) -> str | None:
     stationary)' after 90 real cycles, its COF phase cut short, and nothing said what to do)."""
     if s.get("stationary", True) or s["verdict"] == "loosening":
         return None
+    if s["verdict"] == "damage" and (s.get("stick_area_fraction") or 0.0) <= _ROUNDING:
+        return None  # gross slip: the whole contact slides for good, nothing to settle
     return ("  NOTE: the contact was still changing when the run ended (not yet stationary): the verdict covers "
             "the running time run; raise procedure.cof_cycles (the COF phase) or wear_cycles / life_cycles "
             "(the wear phase) to see where it settles")
@@ -173,9 +175,9 @@ def _human_summary(outcome) -> str:
     if s.get("fdp_max_MPa_mm") is not None:
         lines.append("  fretting damage: " + _damage_maximum("FDP", s["fdp_max_MPa_mm"], "MPa·mm", s.get("fdp_max_location_mm"))
                      + ", " + _damage_maximum("FFDP", s["ffdp_max_MPa2_mm"], "MPa²·mm", s.get("ffdp_max_location_mm")))
-    from contact.verdict import VERDICT_MEANINGS
+    from pipelines.output.report import meaning
 
-    lines.insert(1, f"  {s['verdict']}: {VERDICT_MEANINGS.get(s['verdict'], '')}")
+    lines.insert(1, f"  {s['verdict']}: {meaning(s)}")
     if s.get("contact_solver") is not None:
         lines.append(f"  contact solver: {s['contact_solver']}; {s['linear_solver']}")
     if outcome.stage_times:
